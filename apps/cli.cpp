@@ -1,0 +1,148 @@
+#include "cli.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+
+namespace multislit::cli {
+
+ArgParser::ArgParser(std::string command, std::string summary)
+    : command_(std::move(command)), summary_(std::move(summary)) {}
+
+void ArgParser::option(const std::string& name, const std::string& default_value,
+                       const std::string& help) {
+  order_.push_back(name);
+  specs_[name] = Spec{default_value, help, false};
+}
+
+void ArgParser::flag(const std::string& name, const std::string& help) {
+  order_.push_back(name);
+  specs_[name] = Spec{"", help, true};
+}
+
+void ArgParser::positionals(const std::string& name, const std::string& help,
+                            std::size_t min_count) {
+  positional_name_ = name;
+  positional_help_ = help;
+  positional_min_ = min_count;
+}
+
+bool ArgParser::parse(int argc, char** argv) {
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h") {
+      std::cout << help();
+      return false;
+    }
+    if (arg.rfind("--", 0) != 0 || arg.size() == 2) {
+      if (positional_name_.empty()) throw UsageError("unexpected argument '" + arg + "'");
+      positional_values_.push_back(arg);
+      continue;
+    }
+    std::string name = arg.substr(2), value;
+    const std::size_t eq = name.find('=');
+    const bool inline_value = eq != std::string::npos;
+    if (inline_value) {
+      value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+    }
+    const auto spec = specs_.find(name);
+    if (spec == specs_.end()) throw UsageError("unknown option --" + name);
+    if (spec->second.is_flag) {
+      if (inline_value) throw UsageError("--" + name + " takes no value");
+      values_[name] = "1";
+      continue;
+    }
+    if (!inline_value) {
+      if (i + 1 >= argc) throw UsageError("--" + name + " needs a value");
+      value = argv[++i];
+    }
+    values_[name] = value;
+  }
+  if (positional_values_.size() < positional_min_)
+    throw UsageError("expected at least " + std::to_string(positional_min_) + " " +
+                     positional_name_);
+  return true;
+}
+
+std::string ArgParser::str(const std::string& name) const {
+  const auto v = values_.find(name);
+  if (v != values_.end()) return v->second;
+  const auto s = specs_.find(name);
+  if (s == specs_.end()) throw std::logic_error("no option --" + name);
+  return s->second.default_value;
+}
+
+double ArgParser::number(const std::string& name) const {
+  const std::string text = str(name);
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || errno != 0)
+    throw UsageError("--" + name + " must be a number, not '" + text + "'");
+  return v;
+}
+
+long ArgParser::integer(const std::string& name) const {
+  const std::string text = str(name);
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || errno != 0)
+    throw UsageError("--" + name + " must be a whole number, not '" + text + "'");
+  return v;
+}
+
+bool ArgParser::has(const std::string& name) const {
+  const auto v = values_.find(name);
+  return v != values_.end() && !v->second.empty();
+}
+
+std::string ArgParser::help() const {
+  std::ostringstream out;
+  out << "usage: multislit " << command_ << " [options]"
+      << (positional_name_.empty() ? "" : " " + positional_name_) << "\n\n"
+      << summary_ << "\n\noptions:\n";
+  for (const std::string& name : order_) {
+    const Spec& s = specs_.at(name);
+    std::string left = "  --" + name + (s.is_flag ? "" : " V");
+    if (left.size() < 26) left.resize(26, ' ');
+    out << left << " " << s.help;
+    if (!s.is_flag)
+      out << " (default: " << (s.default_value.empty() ? "none" : s.default_value) << ")";
+    out << "\n";
+  }
+  out << "  --help                     this text\n";
+  if (!positional_name_.empty())
+    out << "\n  " << positional_name_ << ": " << positional_help_ << "\n";
+  return out.str();
+}
+
+Progress::Progress(std::size_t total, std::string label)
+    : total_(total), label_(std::move(label)), enabled_(isatty(STDERR_FILENO) == 1) {}
+
+Progress::~Progress() { finish(); }
+
+void Progress::update(std::size_t done) {
+  if (!enabled_ || total_ == 0) return;
+  const int percent = static_cast<int>(100 * done / total_);
+  if (percent == last_percent_) return;
+  last_percent_ = percent;
+  const int width = 30, filled = percent * width / 100;
+  std::fprintf(stderr, "\r%s [%s%s] %3d%% (%zu/%zu)", label_.c_str(),
+               std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), percent,
+               done, total_);
+  std::fflush(stderr);
+}
+
+void Progress::finish() {
+  if (!enabled_ || finished_) return;
+  finished_ = true;
+  if (last_percent_ >= 0) std::fprintf(stderr, "\n");
+}
+
+}  // namespace multislit::cli

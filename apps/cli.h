@@ -1,0 +1,65 @@
+// Command-line parsing and terminal progress for the multislit tools.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace multislit::cli {
+
+/// A mistake on the command line; main prints it with a hint to use --help.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// `--name value`, `--name=value`, `--flag` and positional arguments, with generated --help.
+class ArgParser {
+ public:
+  ArgParser(std::string command, std::string summary);
+
+  void option(const std::string& name, const std::string& default_value, const std::string& help);
+  void flag(const std::string& name, const std::string& help);
+  void positionals(const std::string& name, const std::string& help, std::size_t min_count = 0);
+
+  /// False when --help was asked for (the help is printed to stdout). Throws UsageError.
+  bool parse(int argc, char** argv);
+
+  std::string str(const std::string& name) const;
+  double number(const std::string& name) const;
+  long integer(const std::string& name) const;
+  bool has(const std::string& name) const;  ///< flag given, or option given a non-empty value
+  const std::vector<std::string>& rest() const { return positional_values_; }
+  std::string help() const;
+
+ private:
+  struct Spec {
+    std::string default_value, help;
+    bool is_flag = false;
+  };
+  std::string command_, summary_;
+  std::vector<std::string> order_;
+  std::map<std::string, Spec> specs_;
+  std::map<std::string, std::string> values_;
+  std::string positional_name_, positional_help_;
+  std::size_t positional_min_ = 0;
+  std::vector<std::string> positional_values_;
+};
+
+/// A progress bar on stderr, drawn only when stderr is a terminal.
+class Progress {
+ public:
+  Progress(std::size_t total, std::string label);
+  ~Progress();
+  void update(std::size_t done);
+  void finish();
+
+ private:
+  std::size_t total_;
+  std::string label_;
+  bool enabled_, finished_ = false;
+  int last_percent_ = -1;
+};
+
+}  // namespace multislit::cli

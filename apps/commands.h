@@ -1,0 +1,8 @@
+// Entry points of the multislit subcommands; argv holds only the command's own arguments.
+#pragma once
+
+namespace multislit::apps {
+
+int runSimulate(int argc, char** argv);
+
+}  // namespace multislit::apps

@@ -1,0 +1,52 @@
+// multislit: the command-line front end. Each subcommand lives in its own cmd_*.cpp.
+#include "cli.h"
+#include "commands.h"
+
+#include <cstring>
+#include <exception>
+#include <iostream>
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+const Command kCommands[] = {
+    {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
+     multislit::apps::runSimulate},
+};
+
+void printUsage(std::ostream& out) {
+  out << "usage: multislit <command> [options]   (multislit <command> --help for its options)\n\n"
+      << "commands:\n";
+  for (const Command& c : kCommands)
+    out << "  " << c.name << std::string(12 - std::strlen(c.name), ' ') << c.summary << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+    printUsage(argc < 2 ? std::cerr : std::cout);
+    return argc < 2 ? 2 : 0;
+  }
+  for (const Command& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    try {
+      return c.run(argc - 2, argv + 2);
+    } catch (const multislit::cli::UsageError& e) {
+      std::cerr << "multislit " << c.name << ": " << e.what() << " (see multislit " << c.name
+                << " --help)\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "multislit " << c.name << ": error: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  std::cerr << "multislit: unknown command '" << argv[1] << "'\n";
+  printUsage(std::cerr);
+  return 2;
+}

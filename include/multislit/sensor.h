@@ -1,0 +1,108 @@
+// The multi-slit range sensor of the paper (Sec. II): camera, laser projector, and its mount.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include <optional>
+#include <string>
+
+namespace multislit {
+
+/// Pinhole camera without lens distortion. Pixel centres are at integer coordinates (OpenCV).
+struct CameraConfig {
+  int width = 1296;              ///< [px]
+  int height = 964;              ///< [px]
+  double pixel_size = 3.75e-6;   ///< square pixel pitch [m]
+  double focal_length = 4.0e-3;  ///< lens focal length [m]
+  double principal_x = -1.0;     ///< principal point u [px]; negative: image centre
+  double principal_y = -1.0;     ///< principal point v [px]; negative: image centre
+
+  double f() const { return focal_length / pixel_size; }  ///< focal length [px]
+  double cx() const { return principal_x < 0 ? 0.5 * (width - 1) : principal_x; }
+  double cy() const { return principal_y < 0 ? 0.5 * (height - 1) : principal_y; }
+};
+
+/// Multi-slit laser projector (StockerYale Mini-715L in the paper). In its own frame a slit i is
+/// the ruled surface of rays (tan(alpha_i) + curvature * t^2, t, 1), |t| <= tan(half_length).
+struct ProjectorConfig {
+  int slit_count = 15;             ///< number of light sheets [-]
+  double slit_spacing = 2.3;       ///< angle between adjacent sheets [deg]
+  double slit_half_length = 22.5;  ///< half the fan angle along a slit [deg]
+  double curvature = 0.08;         ///< pattern distortion (curved slits), see above [-]
+  double sheet_sigma = 1.2e-3;     ///< 1-sigma angular thickness of a light sheet [rad]
+  double baseline = 0.060;         ///< projector centre on the camera's +x axis [m]
+  double rotation = 70.0;          ///< slit pattern rotated about the optical axis (Fig. 3) [deg]
+};
+
+/// Pose of the sensor on the robot (Table I / Fig. 10). The robot frame is x forward, y left,
+/// z up, origin on the floor midway between the feet.
+struct MountConfig {
+  double tilt = 66.0;  ///< theta: depression of the optical axis below the horizontal [deg]
+  double roll =
+      0.0;  ///< phi: roll about the optical axis, positive clockwise seen from behind [deg]
+  double height = 0.445;  ///< h: camera centre above the floor [m]
+  double forward = 0.03;  ///< camera centre ahead of the point between the feet [m]
+};
+
+struct SensorConfig {
+  CameraConfig camera;
+  ProjectorConfig projector;
+  MountConfig mount;
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+  /// OpenCV FileStorage YAML. Missing keys keep their defaults; the result is validated.
+  static SensorConfig load(const std::string& path);
+  void save(const std::string& path) const;
+};
+
+/// Precomputed geometry of a sensor: rays, projections, slit surfaces, mount transform.
+/// Camera frame: x along image rows (and the baseline), y down the columns, z the optical axis.
+class SensorGeometry {
+ public:
+  explicit SensorGeometry(const SensorConfig& config);
+
+  const SensorConfig& config() const { return config_; }
+  int slitCount() const { return config_.projector.slit_count; }
+  /// tan(alpha_i) of slit i, alpha_i = (i - (n-1)/2) * spacing; slits ordered by increasing angle.
+  double slitTan(int slit) const;
+  /// Largest |t| of a slit (tan of its half length).
+  double slitTMax() const { return t_max_; }
+
+  /// Ray through pixel (u, v) in the camera frame, with z = 1.
+  Eigen::Vector3d pixelRay(double u, double v) const;
+  /// Image position of a camera-frame point (z > 0).
+  Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const;
+
+  /// Projector centre in the camera frame.
+  const Eigen::Vector3d& projectorCentre() const { return projector_centre_; }
+  /// Camera-frame point to normalized projector coordinates (x', y') = (x/z, y/z).
+  Eigen::Vector2d toProjector(const Eigen::Vector3d& p_camera) const;
+  /// Direction (camera frame, projector z = 1) of the ray of slit i at slit parameter t.
+  Eigen::Vector3d slitRay(int slit, double t) const;
+  /// Signed angular distance [rad] of normalized projector coordinates from slit i's sheet.
+  double sheetOffset(int slit, const Eigen::Vector2d& xy_projector) const;
+  /// Slit whose sheet is nearest to the projector coordinates.
+  int nearestSlit(const Eigen::Vector2d& xy_projector) const;
+  /// sheetOffset() of the nearest slit, which is stored in *slit (one atan instead of two).
+  double nearestSheetOffset(const Eigen::Vector2d& xy_projector, int* slit) const;
+  /// Image row of every point lit by slit i at parameter t (independent of depth: the
+  /// epipolar lines are rows).
+  double rowOf(int slit, double t) const;
+  /// The parameter t of slit i whose light falls on image row v, if the slit reaches that row.
+  std::optional<double> slitParamForRow(int slit, double v) const;
+  /// Rows [first, last] that slit i can light, clipped to the image; first > last when none.
+  std::pair<int, int> slitRows(int slit) const;
+
+  /// Camera frame to robot frame for a mount (see MountConfig).
+  Eigen::Isometry3d robotFromCamera(const MountConfig& mount) const;
+  Eigen::Isometry3d robotFromCamera() const { return robotFromCamera(config_.mount); }
+
+ private:
+  SensorConfig config_;
+  double f_, cx_, cy_, t_max_;
+  Eigen::Matrix3d camera_from_projector_;  // rotation about z by the pattern rotation
+  Eigen::Vector3d projector_centre_;
+};
+
+}  // namespace multislit

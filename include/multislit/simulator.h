@@ -1,0 +1,73 @@
+// Image formation of the multi-slit sensor, with exact ground truth for every slit crossing.
+#pragma once
+
+#include "multislit/scene.h"
+#include "multislit/sensor.h"
+
+#include <Eigen/Geometry>
+#include <opencv2/core/mat.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace multislit {
+
+/// Radiometry and noise of the camera. Intensities are fractions of the sensor's full scale.
+struct RenderConfig {
+  double laser_peak = 0.9;  ///< sheet centre on albedo 1, facing the projector, at 0.5 m [FS]
+  double ambient = 0.10;    ///< ambient light through the red filter on albedo 1 [FS]
+  double speckle_contrast = 0.15;  ///< std / mean of the laser speckle [-]
+  double speckle_grain = 0.8;      ///< speckle correlation length (Gaussian sigma) [px]
+  double blur_sigma = 0.5;         ///< lens point spread function (Gaussian sigma) [px]
+  double full_well = 12000.0;      ///< electrons at full scale, sets the shot noise [e-]
+  double read_noise = 0.004;       ///< read noise [FS]
+  int bit_depth = 8;               ///< 8 (CV_8U) or 16 (CV_16U)
+  int supersample = 4;             ///< samples per pixel and axis near the slits [-]
+  bool noise = true;               ///< false: no speckle, shot or read noise (a noise-free image)
+  uint64_t seed = 1;               ///< the same seed and frame index give the same bytes
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// Where slit `slit` crosses image row `row`: the exact centre of its light on that row.
+struct SlitCrossing {
+  int slit = 0;                                            ///< 0 .. slit_count-1, by angle
+  int row = 0;                                             ///< image row v [px]
+  double u = 0.0;                                          ///< sub-pixel column on row v [px]
+  Eigen::Vector3d camera_point = Eigen::Vector3d::Zero();  ///< the lit point, camera frame [m]
+  Eigen::Vector3d world_point = Eigen::Vector3d::Zero();   ///< the lit point, world frame [m]
+  int object = 0;                                          ///< 0 floor, k + 1 scene.objects[k]
+  double height = 0.0;                                     ///< above the floor [m]
+};
+
+struct RenderedFrame {
+  cv::Mat image;                    ///< CV_8UC1 or CV_16UC1, camera size
+  std::vector<SlitCrossing> truth;  ///< every visible crossing, by slit then row
+};
+
+class Simulator {
+ public:
+  explicit Simulator(const SensorConfig& sensor, const RenderConfig& render = {});
+
+  const SensorGeometry& geometry() const { return geometry_; }
+  const RenderConfig& renderConfig() const { return render_; }
+
+  /// Renders what the camera at `world_from_camera` sees of `scene`. `frame` selects the noise.
+  RenderedFrame render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
+                       uint64_t frame = 0) const;
+  /// Only the ground truth (no image): for each slit and row, the first surface its light hits,
+  /// kept when the camera sees that point.
+  std::vector<SlitCrossing> groundTruth(const Scene& scene,
+                                        const Eigen::Isometry3d& world_from_camera) const;
+
+ private:
+  SensorGeometry geometry_;
+  RenderConfig render_;
+};
+
+/// Ground truth as CSV: slit,row,u,x,y,z (camera) ,wx,wy,wz (world),object,height.
+void writeGroundTruthCsv(const std::string& path, const std::vector<SlitCrossing>& truth,
+                         const Scene& scene);
+
+}  // namespace multislit

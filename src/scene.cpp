@@ -1,0 +1,348 @@
+#include "multislit/scene.h"
+
+#include "yaml_io.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+
+namespace multislit {
+namespace {
+
+constexpr double kEps = 1e-9;
+constexpr double kDeg = M_PI / 180.0;
+
+// Value noise on an integer lattice, smoothly interpolated; in [-1, 1].
+double hash01(int64_t x, int64_t y, uint64_t seed) {
+  uint64_t h = seed * 0x9E3779B97F4A7C15ULL ^ static_cast<uint64_t>(x) * 0xBF58476D1CE4E5B9ULL ^
+               static_cast<uint64_t>(y) * 0x94D049BB133111EBULL;
+  h ^= h >> 31;
+  h *= 0xD6E8FEB86659FD93ULL;
+  h ^= h >> 32;
+  return static_cast<double>(h >> 11) * 0x1.0p-53;
+}
+
+double valueNoise(double x, double y, uint64_t seed) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const auto ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
+  const double tx = x - fx, ty = y - fy;
+  const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
+  const double a = hash01(ix, iy, seed), b = hash01(ix + 1, iy, seed);
+  const double c = hash01(ix, iy + 1, seed), d = hash01(ix + 1, iy + 1, seed);
+  return 2.0 * ((a + (b - a) * sx) + ((c + (d - c) * sx) - (a + (b - a) * sx)) * sy) - 1.0;
+}
+
+// Wood-like grain: long features along world x (the walking direction), finer ones across.
+double woodGrain(double x, double y, double scale, uint64_t seed) {
+  return 0.55 * valueNoise(x / (6 * scale), y / scale, seed) +
+         0.30 * valueNoise(x / (2 * scale), y / (0.5 * scale), seed + 1) +
+         0.15 * valueNoise(x / scale, y / (0.35 * scale), seed + 2);
+}
+
+void keepNearest(Hit& best, double s, int object, const Eigen::Vector3d& normal) {
+  if (s > kEps && s < best.distance) {
+    best.distance = s;
+    best.object = object;
+    best.normal = normal;
+  }
+}
+
+void intersectSphere(const SceneObject& o, int id, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& d, Hit& best) {
+  const Eigen::Vector3d m = p - o.centre;
+  const double b = m.dot(d), c = m.squaredNorm() - o.radius * o.radius;
+  const double disc = b * b - c;
+  if (disc < 0) return;
+  const double r = std::sqrt(disc);
+  for (double s : {-b - r, -b + r}) {
+    if (s > kEps && s < best.distance) {
+      keepNearest(best, s, id, (p + s * d - o.centre) / o.radius);
+      return;
+    }
+  }
+}
+
+void intersectCylinder(const SceneObject& o, int id, const Eigen::Vector3d& p,
+                       const Eigen::Vector3d& d, Hit& best) {
+  const Eigen::Vector3d axis = o.axis_end - o.axis_start;
+  const double length = axis.norm();
+  const Eigen::Vector3d w = axis / length;
+  const Eigen::Vector3d delta = p - o.axis_start;
+  const Eigen::Vector3d d_perp = d - d.dot(w) * w;
+  const Eigen::Vector3d delta_perp = delta - delta.dot(w) * w;
+  const double a = d_perp.squaredNorm();
+  if (a > 1e-18) {  // mantle
+    const double b = delta_perp.dot(d_perp);
+    const double c = delta_perp.squaredNorm() - o.radius * o.radius;
+    const double disc = b * b - a * c;
+    if (disc >= 0) {
+      const double r = std::sqrt(disc);
+      for (double s : {(-b - r) / a, (-b + r) / a}) {
+        const double h = (delta + s * d).dot(w);
+        if (s > kEps && h >= 0 && h <= length) {
+          const Eigen::Vector3d q = p + s * d - o.axis_start - h * w;
+          keepNearest(best, s, id, q / o.radius);
+          break;
+        }
+      }
+    }
+  }
+  const double dw = d.dot(w);
+  if (std::abs(dw) > 1e-15) {  // caps
+    for (double h0 : {0.0, length}) {
+      const double s = (h0 - delta.dot(w)) / dw;
+      const Eigen::Vector3d q = delta + s * d - h0 * w;
+      if (q.squaredNorm() <= o.radius * o.radius) keepNearest(best, s, id, h0 > 0 ? w : -w);
+    }
+  }
+}
+
+void intersectBox(const SceneObject& o, int id, const Eigen::Vector3d& p, const Eigen::Vector3d& d,
+                  Hit& best) {
+  const Eigen::Matrix3d r =
+      Eigen::AngleAxisd(o.yaw * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Vector3d lp = r.transpose() * (p - o.centre), ld = r.transpose() * d;
+  const Eigen::Vector3d half = 0.5 * o.size;
+  double s_in = -std::numeric_limits<double>::infinity(), s_out = -s_in;
+  int axis_in = 0;
+  double sign_in = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(ld[k]) < 1e-15) {
+      if (std::abs(lp[k]) > half[k]) return;
+      continue;
+    }
+    double s0 = (-half[k] - lp[k]) / ld[k], s1 = (half[k] - lp[k]) / ld[k];
+    double sign = -1.0;  // entering through the -k face
+    if (s0 > s1) {
+      std::swap(s0, s1);
+      sign = 1.0;
+    }
+    if (s0 > s_in) {
+      s_in = s0;
+      axis_in = k;
+      sign_in = sign;
+    }
+    s_out = std::min(s_out, s1);
+  }
+  if (s_in > s_out || s_out < kEps) return;
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  n[axis_in] = sign_in;
+  keepNearest(best, s_in, id, r * n);
+}
+
+Eigen::Vector3d readVec3(const cv::FileNode& node, const char* key,
+                         const Eigen::Vector3d& fallback) {
+  const cv::FileNode n = node[key];
+  if (n.empty()) return fallback;
+  if (!n.isSeq() || n.size() != 3)
+    throw std::invalid_argument(std::string("field '") + key + "' must be a list of 3 numbers");
+  return Eigen::Vector3d(static_cast<double>(n[0]), static_cast<double>(n[1]),
+                         static_cast<double>(n[2]));
+}
+
+void writeVec3(cv::FileStorage& fs, const char* key, const Eigen::Vector3d& v) {
+  fs << key << "[:" << v.x() << v.y() << v.z() << "]";
+}
+
+const char* shapeName(ShapeType t) {
+  switch (t) {
+    case ShapeType::Sphere:
+      return "sphere";
+    case ShapeType::Cylinder:
+      return "cylinder";
+    case ShapeType::Box:
+      return "box";
+  }
+  return "?";
+}
+
+}  // namespace
+
+SceneObject SceneObject::sphere(const std::string& name, const Eigen::Vector3d& centre,
+                                double radius) {
+  SceneObject o;
+  o.name = name;
+  o.type = ShapeType::Sphere;
+  o.centre = centre;
+  o.radius = radius;
+  return o;
+}
+
+SceneObject SceneObject::cylinder(const std::string& name, const Eigen::Vector3d& start,
+                                  const Eigen::Vector3d& end, double radius) {
+  SceneObject o;
+  o.name = name;
+  o.type = ShapeType::Cylinder;
+  o.axis_start = start;
+  o.axis_end = end;
+  o.centre = 0.5 * (start + end);
+  o.radius = radius;
+  return o;
+}
+
+SceneObject SceneObject::box(const std::string& name, const Eigen::Vector3d& centre,
+                             const Eigen::Vector3d& size, double yaw_deg) {
+  SceneObject o;
+  o.name = name;
+  o.type = ShapeType::Box;
+  o.centre = centre;
+  o.size = size;
+  o.yaw = yaw_deg;
+  return o;
+}
+
+void SceneObject::validate() const {
+  const std::string who = "scene object '" + name + "': ";
+  if (!(albedo >= 0 && albedo <= 1)) throw std::invalid_argument(who + "albedo must be in [0, 1]");
+  switch (type) {
+    case ShapeType::Sphere:
+    case ShapeType::Cylinder:
+      if (!(radius > 0)) throw std::invalid_argument(who + "radius must be > 0");
+      if (type == ShapeType::Cylinder && (axis_end - axis_start).norm() <= 0)
+        throw std::invalid_argument(who + "axis_start and axis_end must differ");
+      break;
+    case ShapeType::Box:
+      if (!(size.minCoeff() > 0))
+        throw std::invalid_argument(who + "size must be > 0 on every axis");
+      break;
+  }
+}
+
+double SceneObject::top() const {
+  switch (type) {
+    case ShapeType::Sphere:
+      return centre.z() + radius;
+    case ShapeType::Cylinder:
+      return std::max(axis_start.z(), axis_end.z()) + radius;
+    case ShapeType::Box:
+      return centre.z() + 0.5 * size.z();
+  }
+  return 0;
+}
+
+Hit Scene::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                     double max_distance) const {
+  Hit best;
+  best.distance = max_distance;
+  if (direction.z() < 0)
+    keepNearest(best, -origin.z() / direction.z(), 0, Eigen::Vector3d::UnitZ());
+  for (size_t k = 0; k < objects.size(); ++k) {
+    const SceneObject& o = objects[k];
+    const int id = static_cast<int>(k) + 1;
+    switch (o.type) {
+      case ShapeType::Sphere:
+        intersectSphere(o, id, origin, direction, best);
+        break;
+      case ShapeType::Cylinder:
+        intersectCylinder(o, id, origin, direction, best);
+        break;
+      case ShapeType::Box:
+        intersectBox(o, id, origin, direction, best);
+        break;
+    }
+  }
+  if (best.object < 0) best.distance = std::numeric_limits<double>::infinity();
+  if (best.normal.dot(direction) > 0) best.normal = -best.normal;
+  return best;
+}
+
+double Scene::albedo(int object, const Eigen::Vector3d& point) const {
+  if (object == 0) {
+    const double g = woodGrain(point.x(), point.y(), floor.texture_scale, floor.texture_seed);
+    return std::clamp(floor.albedo * (1.0 + floor.texture_amplitude * g), 0.0, 1.0);
+  }
+  if (object > 0 && object <= static_cast<int>(objects.size())) return objects[object - 1].albedo;
+  return 0.0;
+}
+
+std::string Scene::objectName(int object) const {
+  if (object == 0) return "floor";
+  if (object > 0 && object <= static_cast<int>(objects.size())) return objects[object - 1].name;
+  return "none";
+}
+
+void Scene::validate() const {
+  if (!(floor.albedo > 0 && floor.albedo <= 1))
+    throw std::invalid_argument("scene: floor.albedo must be in (0, 1]");
+  if (!(floor.texture_amplitude >= 0 && floor.texture_amplitude < 1))
+    throw std::invalid_argument("scene: floor.texture_amplitude must be in [0, 1)");
+  if (!(floor.texture_scale > 0))
+    throw std::invalid_argument("scene: floor.texture_scale must be > 0");
+  for (const SceneObject& o : objects) o.validate();
+}
+
+Scene Scene::load(const std::string& path) {
+  cv::FileStorage fs = openYamlForRead(path, "scene");
+  Scene scene;
+  try {
+    const cv::FileNode f = fs["floor"];
+    readField(f, "albedo", scene.floor.albedo);
+    readField(f, "texture_amplitude", scene.floor.texture_amplitude);
+    readField(f, "texture_scale", scene.floor.texture_scale);
+    int seed = static_cast<int>(scene.floor.texture_seed);
+    readField(f, "texture_seed", seed);
+    scene.floor.texture_seed = static_cast<unsigned>(seed);
+    const cv::FileNode list = fs["objects"];
+    if (!list.empty() && !list.isSeq()) throw std::invalid_argument("'objects' must be a list");
+    for (const cv::FileNode& n : list) {
+      std::string type;
+      readField(n, "type", type);
+      SceneObject o;
+      readField(n, "name", o.name);
+      if (o.name.empty()) o.name = type + std::to_string(scene.objects.size());
+      if (type == "sphere") {
+        o = SceneObject::sphere(o.name, readVec3(n, "centre", o.centre), 0.0);
+      } else if (type == "cylinder") {
+        o = SceneObject::cylinder(o.name, readVec3(n, "axis_start", o.axis_start),
+                                  readVec3(n, "axis_end", o.axis_end), 0.0);
+      } else if (type == "box") {
+        o = SceneObject::box(o.name, readVec3(n, "centre", o.centre), readVec3(n, "size", o.size));
+        readField(n, "yaw", o.yaw);
+      } else {
+        throw std::invalid_argument("object '" + o.name +
+                                    "': type must be sphere, cylinder or box, not '" + type + "'");
+      }
+      readField(n, "radius", o.radius);
+      readField(n, "albedo", o.albedo);
+      scene.objects.push_back(o);
+    }
+    scene.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+  return scene;
+}
+
+void Scene::save(const std::string& path) const {
+  cv::FileStorage fs = openYamlForWrite(path, "scene");
+  fs << "floor"
+     << "{";
+  fs << "albedo" << floor.albedo << "texture_amplitude" << floor.texture_amplitude;
+  fs << "texture_scale" << floor.texture_scale << "texture_seed"
+     << static_cast<int>(floor.texture_seed);
+  fs << "}";
+  fs << "objects"
+     << "[";
+  for (const SceneObject& o : objects) {
+    fs << "{"
+       << "type" << shapeName(o.type) << "name" << o.name;
+    if (o.type == ShapeType::Cylinder) {
+      writeVec3(fs, "axis_start", o.axis_start);
+      writeVec3(fs, "axis_end", o.axis_end);
+    } else {
+      writeVec3(fs, "centre", o.centre);
+    }
+    if (o.type == ShapeType::Box) {
+      writeVec3(fs, "size", o.size);
+      fs << "yaw" << o.yaw;
+    } else {
+      fs << "radius" << o.radius;
+    }
+    fs << "albedo" << o.albedo << "}";
+  }
+  fs << "]";
+}
+
+}  // namespace multislit

@@ -1,0 +1,212 @@
+#include "multislit/sensor.h"
+
+#include "yaml_io.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace multislit {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void require(bool ok, const std::string& field, const std::string& rule) {
+  if (!ok) throw std::invalid_argument("sensor config: " + field + " " + rule);
+}
+
+}  // namespace
+
+void SensorConfig::validate() const {
+  const CameraConfig& c = camera;
+  require(c.width >= 16 && c.width <= 20000, "camera.width", "must be in [16, 20000] px");
+  require(c.height >= 16 && c.height <= 20000, "camera.height", "must be in [16, 20000] px");
+  require(c.pixel_size > 0 && c.pixel_size < 1e-3, "camera.pixel_size", "must be in (0, 1e-3) m");
+  require(c.focal_length > 0 && c.focal_length < 1.0, "camera.focal_length", "must be in (0, 1) m");
+  require(c.principal_x < c.width, "camera.principal_x", "must lie inside the image");
+  require(c.principal_y < c.height, "camera.principal_y", "must lie inside the image");
+  const ProjectorConfig& p = projector;
+  require(p.slit_count >= 1 && p.slit_count <= 64, "projector.slit_count", "must be in [1, 64]");
+  require(p.slit_spacing > 0 && p.slit_spacing * (p.slit_count - 1) < 120, "projector.slit_spacing",
+          "must be > 0 deg with the whole fan under 120 deg");
+  require(p.slit_half_length > 0 && p.slit_half_length < 80, "projector.slit_half_length",
+          "must be in (0, 80) deg");
+  require(p.sheet_sigma > 0 && p.sheet_sigma < 0.05, "projector.sheet_sigma",
+          "must be in (0, 0.05) rad");
+  require(p.baseline > 0 && p.baseline < 1.0, "projector.baseline", "must be in (0, 1) m");
+  require(p.rotation >= 0 && p.rotation < 89, "projector.rotation", "must be in [0, 89) deg");
+  // Each slit must cross every row at most once: dv/dt = f (cos(rho) + 2 sin(rho) k t) > 0.
+  const double t_max = std::tan(p.slit_half_length * kDeg);
+  require(std::cos(p.rotation * kDeg) >
+              2.0 * std::abs(p.curvature) * std::sin(p.rotation * kDeg) * t_max,
+          "projector.curvature", "is too large for the rotation: a slit would cross a row twice");
+  const MountConfig& m = mount;
+  require(m.tilt >= 0 && m.tilt <= 90, "mount.tilt", "must be in [0, 90] deg");
+  require(std::abs(m.roll) <= 45, "mount.roll", "must be in [-45, 45] deg");
+  require(m.height > 0 && m.height < 10, "mount.height", "must be in (0, 10) m");
+  require(std::abs(m.forward) < 1, "mount.forward", "must be in (-1, 1) m");
+}
+
+SensorConfig SensorConfig::load(const std::string& path) {
+  cv::FileStorage fs = openYamlForRead(path, "sensor config");
+  SensorConfig s;
+  const cv::FileNode c = fs["camera"];
+  readField(c, "width", s.camera.width);
+  readField(c, "height", s.camera.height);
+  readField(c, "pixel_size", s.camera.pixel_size);
+  readField(c, "focal_length", s.camera.focal_length);
+  readField(c, "principal_x", s.camera.principal_x);
+  readField(c, "principal_y", s.camera.principal_y);
+  const cv::FileNode p = fs["projector"];
+  readField(p, "slit_count", s.projector.slit_count);
+  readField(p, "slit_spacing", s.projector.slit_spacing);
+  readField(p, "slit_half_length", s.projector.slit_half_length);
+  readField(p, "curvature", s.projector.curvature);
+  readField(p, "sheet_sigma", s.projector.sheet_sigma);
+  readField(p, "baseline", s.projector.baseline);
+  readField(p, "rotation", s.projector.rotation);
+  const cv::FileNode m = fs["mount"];
+  readField(m, "tilt", s.mount.tilt);
+  readField(m, "roll", s.mount.roll);
+  readField(m, "height", s.mount.height);
+  readField(m, "forward", s.mount.forward);
+  try {
+    s.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+  return s;
+}
+
+void SensorConfig::save(const std::string& path) const {
+  cv::FileStorage fs = openYamlForWrite(path, "sensor config");
+  fs << "camera"
+     << "{";
+  fs << "width" << camera.width << "height" << camera.height;
+  fs << "pixel_size" << camera.pixel_size << "focal_length" << camera.focal_length;
+  fs << "principal_x" << camera.principal_x << "principal_y" << camera.principal_y;
+  fs << "}";
+  fs << "projector"
+     << "{";
+  fs << "slit_count" << projector.slit_count << "slit_spacing" << projector.slit_spacing;
+  fs << "slit_half_length" << projector.slit_half_length;
+  fs << "curvature" << projector.curvature << "sheet_sigma" << projector.sheet_sigma;
+  fs << "baseline" << projector.baseline << "rotation" << projector.rotation;
+  fs << "}";
+  fs << "mount"
+     << "{";
+  fs << "tilt" << mount.tilt << "roll" << mount.roll << "height" << mount.height;
+  fs << "forward" << mount.forward;
+  fs << "}";
+}
+
+SensorGeometry::SensorGeometry(const SensorConfig& config) : config_(config) {
+  config_.validate();
+  f_ = config_.camera.f();
+  cx_ = config_.camera.cx();
+  cy_ = config_.camera.cy();
+  t_max_ = std::tan(config_.projector.slit_half_length * kDeg);
+  camera_from_projector_ =
+      Eigen::AngleAxisd(config_.projector.rotation * kDeg, Eigen::Vector3d::UnitZ())
+          .toRotationMatrix();
+  projector_centre_ = Eigen::Vector3d(config_.projector.baseline, 0.0, 0.0);
+}
+
+double SensorGeometry::slitTan(int slit) const {
+  const ProjectorConfig& p = config_.projector;
+  return std::tan((slit - 0.5 * (p.slit_count - 1)) * p.slit_spacing * kDeg);
+}
+
+Eigen::Vector3d SensorGeometry::pixelRay(double u, double v) const {
+  return Eigen::Vector3d((u - cx_) / f_, (v - cy_) / f_, 1.0);
+}
+
+Eigen::Vector2d SensorGeometry::project(const Eigen::Vector3d& p) const {
+  return Eigen::Vector2d(cx_ + f_ * p.x() / p.z(), cy_ + f_ * p.y() / p.z());
+}
+
+Eigen::Vector2d SensorGeometry::toProjector(const Eigen::Vector3d& p_camera) const {
+  const Eigen::Vector3d q = camera_from_projector_.transpose() * (p_camera - projector_centre_);
+  return Eigen::Vector2d(q.x() / q.z(), q.y() / q.z());
+}
+
+Eigen::Vector3d SensorGeometry::slitRay(int slit, double t) const {
+  const double k = config_.projector.curvature;
+  return camera_from_projector_ * Eigen::Vector3d(slitTan(slit) + k * t * t, t, 1.0);
+}
+
+double SensorGeometry::sheetOffset(int slit, const Eigen::Vector2d& xy) const {
+  const ProjectorConfig& p = config_.projector;
+  const double alpha = (slit - 0.5 * (p.slit_count - 1)) * p.slit_spacing * kDeg;
+  return std::atan(xy.x() - p.curvature * xy.y() * xy.y()) - alpha;
+}
+
+int SensorGeometry::nearestSlit(const Eigen::Vector2d& xy) const {
+  const ProjectorConfig& p = config_.projector;
+  const double alpha = std::atan(xy.x() - p.curvature * xy.y() * xy.y());
+  const long i = std::lround(alpha / (p.slit_spacing * kDeg) + 0.5 * (p.slit_count - 1));
+  return static_cast<int>(std::clamp<long>(i, 0, p.slit_count - 1));
+}
+
+double SensorGeometry::nearestSheetOffset(const Eigen::Vector2d& xy, int* slit) const {
+  const ProjectorConfig& p = config_.projector;
+  const double spacing = p.slit_spacing * kDeg, middle = 0.5 * (p.slit_count - 1);
+  const double alpha = std::atan(xy.x() - p.curvature * xy.y() * xy.y());
+  const double i = std::clamp(std::nearbyint(alpha / spacing + middle), 0.0, p.slit_count - 1.0);
+  *slit = static_cast<int>(i);
+  return alpha - (i - middle) * spacing;
+}
+
+double SensorGeometry::rowOf(int slit, double t) const {
+  return cy_ + f_ * slitRay(slit, t).y();  // slitRay has z = 1: rotation is about z
+}
+
+std::optional<double> SensorGeometry::slitParamForRow(int slit, double v) const {
+  // v = cy + f (sin(rho) (a + k t^2) + cos(rho) t): a quadratic in t, one root in range.
+  const double rho = config_.projector.rotation * kDeg;
+  const double qa = std::sin(rho) * config_.projector.curvature;
+  const double qb = std::cos(rho);
+  const double qc = std::sin(rho) * slitTan(slit) + (cy_ - v) / f_;
+  double t;
+  if (std::abs(qa) < 1e-15) {
+    t = -qc / qb;
+  } else {
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc < 0) return std::nullopt;
+    const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+    t = qc / q;  // the root that tends to -c/b as the curvature vanishes
+  }
+  if (std::abs(t) > t_max_) return std::nullopt;
+  return t;
+}
+
+std::pair<int, int> SensorGeometry::slitRows(int slit) const {
+  const double a = rowOf(slit, -t_max_);
+  const double b = rowOf(slit, t_max_);
+  const int first = std::max(0, static_cast<int>(std::ceil(std::min(a, b))));
+  const int last =
+      std::min(config_.camera.height - 1, static_cast<int>(std::floor(std::max(a, b))));
+  return {first, last};
+}
+
+Eigen::Isometry3d SensorGeometry::robotFromCamera(const MountConfig& mount) const {
+  // Body frame B: x right, y down, z forward, with the slits along x (across the walking
+  // direction). The camera is turned about the optical axis by the pattern rotation + 90 deg,
+  // so that the slits' long axis (projector y) is the body's x axis.
+  Eigen::Matrix3d robot_from_level;
+  robot_from_level.col(0) = Eigen::Vector3d(0, -1, 0);  // right
+  robot_from_level.col(1) = Eigen::Vector3d(0, 0, -1);  // down
+  robot_from_level.col(2) = Eigen::Vector3d(1, 0, 0);   // forward
+  const Eigen::Matrix3d body =
+      robot_from_level *
+      Eigen::AngleAxisd(-mount.tilt * kDeg, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+      Eigen::AngleAxisd(mount.roll * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d body_from_camera =
+      Eigen::AngleAxisd(-(config_.projector.rotation + 90.0) * kDeg, Eigen::Vector3d::UnitZ())
+          .toRotationMatrix();
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = body * body_from_camera;
+  t.translation() = Eigen::Vector3d(mount.forward, 0.0, mount.height);
+  return t;
+}
+
+}  // namespace multislit

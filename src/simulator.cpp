@@ -1,0 +1,277 @@
+#include "multislit/simulator.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+namespace multislit {
+namespace {
+
+// Counter-based random numbers: each image row has its own stream, so the bytes do not depend
+// on how rows are shared between threads.
+class RowRandom {
+ public:
+  RowRandom(uint64_t seed, uint64_t frame, uint64_t row, uint64_t stream)
+      : state_(mix(mix(mix(seed) ^ frame) ^ (row << 8 | stream))) {}
+
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  double normal() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    const double u1 = 1.0 - uniform(), u2 = uniform();  // u1 in (0, 1]
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    spare_ = r * std::sin(2.0 * M_PI * u2);
+    has_spare_ = true;
+    return r * std::cos(2.0 * M_PI * u2);
+  }
+
+ private:
+  static uint64_t mix(uint64_t z) {
+    z += 0x9E3779B97F4A7C15ULL;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  uint64_t next() { return mix(state_ += 0x9E3779B97F4A7C15ULL); }
+
+  uint64_t state_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+enum Stream : uint64_t { kSpeckle = 1, kSensorNoise = 2 };
+
+// Everything needed to shade one ray, in world coordinates.
+struct Shader {
+  const Scene& scene;
+  const SensorGeometry& geometry;
+  const RenderConfig& render;
+  Eigen::Isometry3d world_from_camera;
+  Eigen::Vector3d camera_centre, projector_centre;
+
+  // Laser light reaching the camera along the ray through (u, v) [FS]. The floor's albedo is
+  // taken from the pixel centre (`pixel_object`, `pixel_albedo`): its grain is many pixels wide.
+  double laser(double u, double v, int pixel_object, double pixel_albedo) const {
+    const Eigen::Vector3d ray_c = geometry.pixelRay(u, v).normalized();
+    const Eigen::Vector3d ray_w = world_from_camera.linear() * ray_c;
+    const Hit hit = scene.intersect(camera_centre, ray_w);
+    if (!hit.valid()) return 0.0;
+    const Eigen::Vector3d point_c = hit.distance * ray_c;
+    const Eigen::Vector2d xy = geometry.toProjector(point_c);
+    if (std::abs(xy.y()) > geometry.slitTMax()) return 0.0;
+    int slit = 0;
+    const double offset = geometry.nearestSheetOffset(xy, &slit);
+    const double sigma = geometry.config().projector.sheet_sigma;
+    const double profile = std::exp(-0.5 * offset * offset / (sigma * sigma));
+    if (profile < 1e-7) return 0.0;
+    const Eigen::Vector3d point_w = camera_centre + hit.distance * ray_w;
+    const Eigen::Vector3d to_point = point_w - projector_centre;
+    const double range = to_point.norm();
+    const Eigen::Vector3d dir = to_point / range;
+    const double incidence = -hit.normal.dot(dir);
+    if (incidence <= 0) return 0.0;
+    if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return 0.0;  // shadow
+    const double falloff = (0.5 / range) * (0.5 / range);
+    const double albedo =
+        hit.object == pixel_object ? pixel_albedo : scene.albedo(hit.object, point_w);
+    return render.laser_peak * albedo * incidence * falloff * profile;
+  }
+
+  // Ambient light, and whether the laser is near this pixel (so it must be supersampled).
+  double ambient(double u, double v, bool* near_slit, int* object, double* albedo) const {
+    const Eigen::Vector3d ray_c = geometry.pixelRay(u, v).normalized();
+    const Eigen::Vector3d ray_w = world_from_camera.linear() * ray_c;
+    const Hit hit = scene.intersect(camera_centre, ray_w);
+    *near_slit = false;
+    *object = hit.object;
+    *albedo = 0.0;
+    if (!hit.valid()) return 0.0;
+    const Eigen::Vector2d xy = geometry.toProjector(hit.distance * ray_c);
+    int slit = 0;
+    const double offset = geometry.nearestSheetOffset(xy, &slit);
+    // Beyond 4.5 sigma the sheet adds < 4e-5 of its peak; the pixel's own extent is ~1/f.
+    const double pixel = 2.0 / geometry.config().camera.f();
+    const double reach = 4.5 * geometry.config().projector.sheet_sigma + pixel;
+    *near_slit = std::abs(offset) < reach && std::abs(xy.y()) < geometry.slitTMax() + pixel;
+    *albedo = scene.albedo(hit.object, camera_centre + hit.distance * ray_w);
+    return render.ambient * *albedo;
+  }
+};
+
+}  // namespace
+
+void RenderConfig::validate() const {
+  auto require = [](bool ok, const char* field, const char* rule) {
+    if (!ok) throw std::invalid_argument(std::string("render config: ") + field + " " + rule);
+  };
+  require(laser_peak >= 0, "laser_peak", "must be >= 0");
+  require(ambient >= 0, "ambient", "must be >= 0");
+  require(speckle_contrast >= 0 && speckle_contrast < 1, "speckle_contrast", "must be in [0, 1)");
+  require(speckle_grain >= 0.3 && speckle_grain <= 10, "speckle_grain", "must be in [0.3, 10] px");
+  require(blur_sigma >= 0 && blur_sigma <= 10, "blur_sigma", "must be in [0, 10] px");
+  require(full_well >= 100, "full_well", "must be >= 100 e-");
+  require(read_noise >= 0 && read_noise < 0.5, "read_noise", "must be in [0, 0.5) FS");
+  require(bit_depth == 8 || bit_depth == 16, "bit_depth", "must be 8 or 16");
+  require(supersample >= 1 && supersample <= 16, "supersample", "must be in [1, 16]");
+}
+
+Simulator::Simulator(const SensorConfig& sensor, const RenderConfig& render)
+    : geometry_(sensor), render_(render) {
+  render_.validate();
+}
+
+RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
+                                uint64_t frame) const {
+  const int width = geometry_.config().camera.width, height = geometry_.config().camera.height;
+  const Shader shader{scene,
+                      geometry_,
+                      render_,
+                      world_from_camera,
+                      world_from_camera.translation(),
+                      world_from_camera * geometry_.projectorCentre()};
+
+  // 1. Ambient light at every pixel centre, and where the laser sheets may be.
+  cv::Mat ambient(height, width, CV_64F), near(height, width, CV_8U);
+  cv::Mat object(height, width, CV_32S), albedo(height, width, CV_64F);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      double* a = ambient.ptr<double>(r);
+      uchar* n = near.ptr<uchar>(r);
+      for (int c = 0; c < width; ++c) {
+        bool is_near = false;
+        a[c] = shader.ambient(c, r, &is_near, &object.ptr<int>(r)[c], &albedo.ptr<double>(r)[c]);
+        n[c] = is_near ? 255 : 0;
+      }
+    }
+  });
+  cv::dilate(near, near, cv::Mat::ones(3, 3, CV_8U));  // catch pixels split by an edge
+
+  // 2. Laser light, integrated over each pixel's area near the sheets (sub-pixel positions).
+  const int n = render_.supersample;
+  cv::Mat laser(height, width, CV_64F, cv::Scalar(0));
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      const uchar* m = near.ptr<uchar>(r);
+      const int* id = object.ptr<int>(r);
+      const double* rho = albedo.ptr<double>(r);
+      double* l = laser.ptr<double>(r);
+      for (int c = 0; c < width; ++c) {
+        if (!m[c]) continue;
+        double sum = 0.0;
+        for (int j = 0; j < n; ++j)
+          for (int i = 0; i < n; ++i)
+            sum += shader.laser(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n, id[c], rho[c]);
+        l[c] = sum / (n * n);
+      }
+    }
+  });
+
+  // 3. Laser speckle: multiplicative, spatially correlated over a grain.
+  if (render_.noise && render_.speckle_contrast > 0) {
+    cv::Mat speckle(height, width, CV_64F);
+    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+      for (int r = rows.start; r < rows.end; ++r) {
+        RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSpeckle);
+        double* s = speckle.ptr<double>(r);
+        for (int c = 0; c < width; ++c) s[c] = rng.normal();
+      }
+    });
+    const double g = render_.speckle_grain;
+    cv::GaussianBlur(speckle, speckle, cv::Size(), g, g, cv::BORDER_REFLECT);
+    speckle = 1.0 + render_.speckle_contrast * 2.0 * std::sqrt(M_PI) * g * speckle;
+    cv::max(speckle, 0.0, speckle);
+    laser = laser.mul(speckle);
+  }
+
+  // 4. Lens blur, then shot and read noise, saturation and quantization.
+  cv::Mat irradiance = ambient + laser;
+  if (render_.blur_sigma > 0)
+    cv::GaussianBlur(irradiance, irradiance, cv::Size(), render_.blur_sigma, render_.blur_sigma,
+                     cv::BORDER_REFLECT);
+  const double full = render_.bit_depth == 8 ? 255.0 : 65535.0;
+  RenderedFrame out;
+  out.image.create(height, width, render_.bit_depth == 8 ? CV_8U : CV_16U);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSensorNoise);
+      const double* e = irradiance.ptr<double>(r);
+      for (int c = 0; c < width; ++c) {
+        double value = e[c];
+        if (render_.noise) {
+          const double sigma = std::sqrt(std::max(value, 0.0) / render_.full_well +
+                                         render_.read_noise * render_.read_noise);
+          value += sigma * rng.normal();
+        }
+        const double dn = std::round(std::clamp(value, 0.0, 1.0) * full);
+        if (render_.bit_depth == 8)
+          out.image.ptr<uint8_t>(r)[c] = static_cast<uint8_t>(dn);
+        else
+          out.image.ptr<uint16_t>(r)[c] = static_cast<uint16_t>(dn);
+      }
+    }
+  });
+  out.truth = groundTruth(scene, world_from_camera);
+  return out;
+}
+
+std::vector<SlitCrossing> Simulator::groundTruth(const Scene& scene,
+                                                 const Eigen::Isometry3d& world_from_camera) const {
+  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
+  const Eigen::Vector3d camera_centre = world_from_camera.translation();
+  const Eigen::Vector3d projector_centre = world_from_camera * geometry_.projectorCentre();
+  const int width = geometry_.config().camera.width;
+  std::vector<SlitCrossing> truth;
+  for (int slit = 0; slit < geometry_.slitCount(); ++slit) {
+    const auto [first, last] = geometry_.slitRows(slit);
+    for (int row = first; row <= last; ++row) {
+      // The light on row `row` comes from one ray of the slit, whatever the depth.
+      const std::optional<double> t = geometry_.slitParamForRow(slit, row);
+      if (!t) continue;
+      const Eigen::Vector3d dir =
+          (world_from_camera.linear() * geometry_.slitRay(slit, *t)).normalized();
+      const Hit hit = scene.intersect(projector_centre, dir);
+      if (!hit.valid() || hit.normal.dot(dir) >= 0) continue;
+      const Eigen::Vector3d point_w = projector_centre + hit.distance * dir;
+      const Eigen::Vector3d point_c = camera_from_world * point_w;
+      if (point_c.z() <= 0) continue;
+      const Eigen::Vector3d to_point = point_w - camera_centre;
+      const double range = to_point.norm();
+      const Hit seen = scene.intersect(camera_centre, to_point / range, range * (1.0 - 1e-9));
+      if (seen.valid()) continue;  // hidden from the camera
+      const Eigen::Vector2d uv = geometry_.project(point_c);
+      if (uv.x() < 0 || uv.x() > width - 1) continue;
+      SlitCrossing x;
+      x.slit = slit;
+      x.row = row;
+      x.u = uv.x();
+      x.camera_point = point_c;
+      x.world_point = point_w;
+      x.object = hit.object;
+      x.height = point_w.z();
+      truth.push_back(x);
+    }
+  }
+  return truth;
+}
+
+void writeGroundTruthCsv(const std::string& path, const std::vector<SlitCrossing>& truth,
+                         const Scene& scene) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("ground truth '" + path + "' cannot be written");
+  out << "slit,row,u,x,y,z,world_x,world_y,world_z,object,object_name,height\n";
+  out.precision(10);
+  for (const SlitCrossing& t : truth) {
+    out << t.slit << ',' << t.row << ',' << t.u << ',' << t.camera_point.x() << ','
+        << t.camera_point.y() << ',' << t.camera_point.z() << ',' << t.world_point.x() << ','
+        << t.world_point.y() << ',' << t.world_point.z() << ',' << t.object << ','
+        << scene.objectName(t.object) << ',' << t.height << '\n';
+  }
+  if (!out) throw std::runtime_error("ground truth '" + path + "' could not be written completely");
+}
+
+}  // namespace multislit

@@ -1,0 +1,47 @@
+// Small helpers around cv::FileStorage so that every config file reports errors the same way.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+namespace multislit {
+
+/// Opens a YAML file for reading; throws std::runtime_error naming the file and what it is.
+inline cv::FileStorage openYamlForRead(const std::string& path, const std::string& what) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(what + " '" + path + "' is not valid YAML: " + e.err);
+  }
+  if (!fs.isOpened()) throw std::runtime_error(what + " '" + path + "' cannot be read");
+  return fs;
+}
+
+inline cv::FileStorage openYamlForWrite(const std::string& path, const std::string& what) {
+  cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+  if (!fs.isOpened()) throw std::runtime_error(what + " '" + path + "' cannot be written");
+  return fs;
+}
+
+/// Reads node[key] into value when present; throws std::invalid_argument naming the key when
+/// the entry has the wrong type. Absent keys leave the default in place.
+template <typename T>
+void readField(const cv::FileNode& node, const char* key, T& value) {
+  if (node.empty() || !node.isMap()) return;
+  const cv::FileNode n = node[key];
+  if (n.empty() || n.isNone()) return;
+  if constexpr (std::is_arithmetic_v<T>) {
+    if (!n.isInt() && !n.isReal())
+      throw std::invalid_argument(std::string("field '") + key + "' must be a number");
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    if (!n.isString())
+      throw std::invalid_argument(std::string("field '") + key + "' must be a string");
+  }
+  n >> value;
+}
+
+}  // namespace multislit

@@ -1,0 +1,154 @@
+// Sensor geometry: projections, slit surfaces, mount, configuration files.
+#include "multislit/sensor.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+using multislit::SensorConfig;
+using multislit::SensorGeometry;
+
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("multislit_sensor_test_" + name)).string();
+}
+
+std::string validationMessage(const SensorConfig& c) {
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(SensorConfig, DefaultsAreThePapers) {
+  const SensorConfig c;
+  EXPECT_EQ(c.camera.width, 1296);
+  EXPECT_EQ(c.camera.height, 964);
+  EXPECT_NEAR(c.camera.f(), 4.0e-3 / 3.75e-6, 1e-9);
+  EXPECT_EQ(c.projector.slit_count, 15);
+  EXPECT_DOUBLE_EQ(c.projector.slit_spacing, 2.3);
+  EXPECT_DOUBLE_EQ(c.projector.baseline, 0.060);
+  EXPECT_DOUBLE_EQ(c.projector.rotation, 70.0);
+  EXPECT_DOUBLE_EQ(c.mount.tilt, 66.0);
+  EXPECT_DOUBLE_EQ(c.mount.height, 0.445);
+  EXPECT_NO_THROW(c.validate());
+}
+
+TEST(SensorConfig, BadFieldIsNamed) {
+  SensorConfig c;
+  c.camera.width = -3;
+  EXPECT_NE(validationMessage(c).find("camera.width"), std::string::npos);
+  c = SensorConfig{};
+  c.projector.baseline = 0.0;
+  EXPECT_NE(validationMessage(c).find("projector.baseline"), std::string::npos);
+  c = SensorConfig{};
+  c.projector.curvature = 2.0;  // a slit would cross some rows twice
+  EXPECT_NE(validationMessage(c).find("projector.curvature"), std::string::npos);
+  c = SensorConfig{};
+  c.mount.tilt = 120;
+  EXPECT_NE(validationMessage(c).find("mount.tilt"), std::string::npos);
+}
+
+TEST(SensorConfig, YamlRoundTripAndErrorsNameTheFile) {
+  SensorConfig c;
+  c.projector.baseline = 0.07;
+  c.mount.roll = -5;
+  const std::string path = tempPath("roundtrip.yaml");
+  c.save(path);
+  const SensorConfig back = SensorConfig::load(path);
+  EXPECT_DOUBLE_EQ(back.projector.baseline, 0.07);
+  EXPECT_DOUBLE_EQ(back.mount.roll, -5);
+  EXPECT_EQ(back.camera.width, c.camera.width);
+
+  const std::string bad = tempPath("bad.yaml");
+  std::ofstream(bad) << "%YAML:1.0\n---\ncamera:\n  width: -5\n";
+  try {
+    SensorConfig::load(bad);
+    FAIL() << "a negative width must be rejected";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("camera.width"), std::string::npos) << e.what();
+  }
+  std::ofstream(bad) << "%YAML:1.0\n---\ncamera:\n  width: wide\n";
+  EXPECT_THROW(SensorConfig::load(bad), std::invalid_argument);
+  EXPECT_THROW(SensorConfig::load(tempPath("missing.yaml")), std::runtime_error);
+  std::remove(path.c_str());
+  std::remove(bad.c_str());
+}
+
+TEST(SensorConfig, CommittedDefaultFileIsTheDefault) {
+  const SensorConfig c = SensorConfig::load(std::string(MULTISLIT_DATA_DIR) + "/sensor.yaml");
+  const SensorConfig d;
+  EXPECT_EQ(c.camera.width, d.camera.width);
+  EXPECT_DOUBLE_EQ(c.projector.curvature, d.projector.curvature);
+  EXPECT_DOUBLE_EQ(c.projector.sheet_sigma, d.projector.sheet_sigma);
+  EXPECT_DOUBLE_EQ(c.mount.forward, d.mount.forward);
+}
+
+TEST(SensorGeometry, ProjectInvertsPixelRay) {
+  const SensorGeometry g{SensorConfig{}};
+  for (double u : {0.0, 100.25, 647.5, 1295.0})
+    for (double v : {0.0, 481.5, 900.75}) {
+      const Eigen::Vector2d uv = g.project(0.37 * g.pixelRay(u, v));
+      EXPECT_NEAR(uv.x(), u, 1e-9);
+      EXPECT_NEAR(uv.y(), v, 1e-9);
+    }
+}
+
+TEST(SensorGeometry, SlitRaysLieOnTheirSheetAndKeepTheirRowAtAnyDepth) {
+  const SensorGeometry g{SensorConfig{}};
+  for (int slit : {0, 7, 14})
+    for (double t : {-0.4, 0.0, 0.3}) {
+      const Eigen::Vector3d dir = g.slitRay(slit, t);
+      for (double s : {0.2, 0.5, 2.0}) {
+        const Eigen::Vector3d p = g.projectorCentre() + s * dir;
+        EXPECT_NEAR(g.sheetOffset(slit, g.toProjector(p)), 0.0, 1e-12);
+        EXPECT_EQ(g.nearestSlit(g.toProjector(p)), slit);
+        // Parallel stereo: a projector ray is seen on one image row, whatever the depth.
+        EXPECT_NEAR(g.project(p).y(), g.rowOf(slit, t), 1e-9);
+      }
+      const std::optional<double> back = g.slitParamForRow(slit, g.rowOf(slit, t));
+      ASSERT_TRUE(back.has_value());
+      EXPECT_NEAR(*back, t, 1e-12);
+    }
+}
+
+TEST(SensorGeometry, RotationShrinksRowsPerSlitByCosTheta) {
+  // v(t) = cy + f (sin(rho) (a + k t^2) + cos(rho) t): the curvature term is even in t, so a slit
+  // spans 2 f tan(half length) cos(rho) rows (paper Sec. II-A: "cos(theta) times").
+  const SensorGeometry g{SensorConfig{}};
+  const double expected = 2.0 * g.config().camera.f() * g.slitTMax() * std::cos(70.0 * M_PI / 180);
+  for (int slit = 0; slit < g.slitCount(); ++slit) {
+    const auto [first, last] = g.slitRows(slit);
+    EXPECT_NEAR(last - first + 1, expected, 1.0) << "slit " << slit;
+  }
+}
+
+TEST(SensorGeometry, MountLooksDownAtTheFloorInFrontOfTheFeet) {
+  const SensorGeometry g{SensorConfig{}};
+  const Eigen::Isometry3d robot_from_camera = g.robotFromCamera();
+  EXPECT_NEAR(robot_from_camera.translation().z(), 0.445, 1e-12);
+  const Eigen::Vector3d axis = robot_from_camera.linear() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(std::asin(-axis.z()) * 180 / M_PI, 66.0, 1e-9);  // theta below the horizontal
+  EXPECT_NEAR(axis.y(), 0.0, 1e-12);
+  // The optical axis meets the floor h / tan(theta) ahead of the camera.
+  const double s = 0.445 / -axis.z();
+  EXPECT_NEAR((robot_from_camera.translation() + s * axis).x(),
+              0.03 + 0.445 / std::tan(66 * M_PI / 180), 1e-9);
+  // The slits lie across the walking direction: the middle slit's ends on the floor differ in y.
+  const Eigen::Vector3d origin = robot_from_camera * g.projectorCentre();
+  auto onFloor = [&](double t) {
+    const Eigen::Vector3d d = robot_from_camera.linear() * g.slitRay(7, t);
+    return Eigen::Vector3d(origin - origin.z() / d.z() * d);
+  };
+  const Eigen::Vector3d across = onFloor(0.3) - onFloor(-0.3);
+  EXPECT_GT(std::abs(across.y()), 10 * std::abs(across.x()));
+}
