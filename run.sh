@@ -1,0 +1,135 @@
+#!/usr/bin/env bash
+# multislit on a fresh Debian 12 machine:
+#   bash run.sh demo   install what is missing, build (Release, build/), run the main job
+#   bash run.sh test   install what is missing, build, run every test in build/ (Release) and in
+#                      build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)
+set -euo pipefail
+
+# ==== THE MAIN JOB: the one command `bash run.sh demo` runs (replace it, keep it one line) ====
+DEMO=(build/multislit simulate --scenario ball --frames 5 --out out/demo)
+
+PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev libaravis-dev
+  libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format)
+
+cd "$(dirname "${BASH_SOURCE[0]}")"
+JOBS=$(nproc)
+
+usage() {
+  echo "usage: bash run.sh demo | test" >&2
+  exit 2
+}
+
+# Section headers with the time each section took.
+now() { date +%s%N; }
+section_start=
+section_name=
+section() {
+  section_end
+  section_name=$1
+  section_start=$(now)
+  echo "== $section_name"
+}
+section_end() {
+  if [[ -n $section_start ]]; then
+    local ms=$((($(now) - section_start) / 1000000))
+    printf '   %s: %d.%01d s\n' "$section_name" $((ms / 1000)) $((ms % 1000 / 100))
+    SUMMARY+=("$(printf '%-26s %4d.%01d s' "$section_name" $((ms / 1000)) $((ms % 1000 / 100)))")
+  fi
+  section_start=
+}
+SUMMARY=()
+
+as_root() {
+  if ((EUID == 0)); then
+    "$@"
+  elif command -v sudo >/dev/null; then
+    sudo "$@"
+  else
+    echo "run.sh: not root and no sudo; as root run: apt-get install ${missing[*]}" >&2
+    exit 1
+  fi
+}
+
+install_packages() {
+  section "installing"
+  if ! command -v dpkg-query >/dev/null; then
+    echo "run.sh: dpkg-query not found; this script expects Debian 12" >&2
+    exit 1
+  fi
+  missing=()
+  local p status
+  for p in "${PACKAGES[@]}"; do
+    status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+    [[ $status == "install ok installed" ]] || missing+=("$p")
+  done
+  if ((${#missing[@]} == 0)); then
+    echo "   all ${#PACKAGES[@]} packages present"
+  else
+    echo "   missing: ${missing[*]}"
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get update
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
+      "${missing[@]}"
+  fi
+}
+
+# configure_and_build <build dir> <cmake --build arguments...> -- <cmake configure options...>
+configure_and_build() {
+  local dir=$1 build_args=() configure_args=()
+  shift
+  while (($#)) && [[ $1 != -- ]]; do
+    build_args+=("$1")
+    shift
+  done
+  (($#)) && shift
+  configure_args=("$@")
+  cmake -S . -B "$dir" "${configure_args[@]}"
+  cmake --build "$dir" -j"$JOBS" "${build_args[@]}"
+}
+
+run_demo() {
+  install_packages
+  section "building"
+  # The demo needs the command only; `bash run.sh test` builds everything.
+  configure_and_build build --target multislit_cli -- -DCMAKE_BUILD_TYPE=Release
+  section "demo"
+  "${DEMO[@]}"
+  section_end
+  # Where the outputs are: the folder given to --out.
+  local i
+  for ((i = 0; i + 1 < ${#DEMO[@]}; i++)); do
+    if [[ ${DEMO[i]} == --out ]]; then
+      echo "== outputs: $(find "${DEMO[i + 1]}" -maxdepth 1 -type f | wc -l) files in" \
+        "$(pwd)/${DEMO[i + 1]}/"
+    fi
+  done
+}
+
+run_tests() {
+  local failed=()
+  install_packages
+  section "building"
+  configure_and_build build -- -DCMAKE_BUILD_TYPE=Release
+  section "testing (release)"
+  ctest --test-dir build --output-on-failure -j2 || failed+=("release")
+  section "building (ASan+UBSan)"
+  configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DMULTISLIT_BUILD_BENCHMARKS=OFF
+  section "testing (ASan+UBSan)"
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan --output-on-failure -j2 || failed+=("ASan+UBSan")
+  section_end
+  echo "== times"
+  printf '   %s\n' "${SUMMARY[@]}"
+  if ((${#failed[@]})); then
+    echo "== FAILED: tests of ${failed[*]}" >&2
+    exit 1
+  fi
+  echo "== all tests passed"
+}
+
+(($# == 1)) || usage
+case $1 in
+  demo) run_demo ;;
+  test) run_tests ;;
+  *) usage ;;
+esac
