@@ -44,7 +44,25 @@ std::vector<std::string> scenarioNames() {
           "cond6",     "fig8",  "cable", "ball",  "floor"};
 }
 
+Scenario makeWallScenario(double depth) {
+  if (!(depth > 0.1 && depth < 5)) throw std::invalid_argument("wall depth must be in (0.1, 5) m");
+  Scenario s;
+  s.name = "wall";
+  s.description = "a wall " + std::to_string(depth) + " m in front of the level sensor";
+  s.reference_mount = tableIPose(0);
+  s.mount = s.reference_mount;
+  s.mount.tilt = 0;
+  s.mount.roll = 0;
+  const double face = s.mount.forward + depth, thickness = 0.1;
+  s.scene.objects.push_back(
+      SceneObject::box("wall", Eigen::Vector3d(face + thickness / 2, 0, s.mount.height),
+                       Eigen::Vector3d(thickness, 4.0, 2 * s.mount.height - 0.01)));
+  s.scene.objects.back().albedo = 0.6;
+  return s;
+}
+
 Scenario makeScenario(const std::string& name) {
+  if (name == "wall") return makeWallScenario(0.5);
   Scenario s;
   s.name = name;
   s.reference_mount = tableIPose(0);

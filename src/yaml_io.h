@@ -3,6 +3,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -11,6 +12,8 @@ namespace multislit {
 
 /// Opens a YAML file for reading; throws std::runtime_error naming the file and what it is.
 inline cv::FileStorage openYamlForRead(const std::string& path, const std::string& what) {
+  if (!std::ifstream(path).good())
+    throw std::runtime_error(what + " '" + path + "' cannot be read");
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -30,9 +30,13 @@ struct Scenario {
 };
 
 /// reference, cond1 .. cond6 (Table I), fig8 (tennis ball and box seen from 50 mm higher),
-/// cable (7 mm LAN cable across the path), ball (40 mm ping-pong ball), floor (walk, no object).
+/// cable (7 mm LAN cable across the path), ball (40 mm ping-pong ball), floor (walk, no object),
+/// wall (a wall 0.5 m in front of the level sensor, see makeWallScenario).
 std::vector<std::string> scenarioNames();
 /// Throws std::invalid_argument listing the known names.
 Scenario makeScenario(const std::string& name);
+/// A flat wall facing the level sensor at `depth` metres along the optical axis: what a user
+/// with a wall and a tape measure films to calibrate the metric scale.
+Scenario makeWallScenario(double depth);
 
 }  // namespace multislit

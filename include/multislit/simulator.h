@@ -17,7 +17,7 @@ namespace multislit {
 struct RenderConfig {
   double laser_peak = 0.9;  ///< sheet centre on albedo 1, facing the projector, at 0.5 m [FS]
   double ambient = 0.10;    ///< ambient light through the red filter on albedo 1 [FS]
-  double speckle_contrast = 0.15;  ///< std / mean of the laser speckle [-]
+  double speckle_contrast = 0.04;  ///< std / mean of the laser speckle per pixel [-]
   double speckle_grain = 0.8;      ///< speckle correlation length (Gaussian sigma) [px]
   double blur_sigma = 0.5;         ///< lens point spread function (Gaussian sigma) [px]
   double full_well = 12000.0;      ///< electrons at full scale, sets the shot noise [e-]

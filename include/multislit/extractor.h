@@ -1,0 +1,59 @@
+// From a camera image to the relative disparity map (paper Sec. III-A) as an organized PCL cloud.
+#pragma once
+
+#include "multislit/point_types.h"
+#include "multislit/reference.h"
+#include "multislit/slit_profile.h"
+
+#include <pcl/point_cloud.h>
+
+#include <cstdint>
+#include <string>
+
+namespace multislit {
+
+struct ExtractorConfig {
+  Estimator estimator = Estimator::Gaussian;  ///< chosen by measurement, see README
+  double min_contrast = 0.06;                 ///< slit peak above its background [full scale]
+  double max_width_factor = 2.5;  ///< widest valid profile, times the reference's width [-]
+  double min_width_factor = 0.6;  ///< narrowest valid profile, times the reference's width:
+                                  ///< a slit cut by its end or by an edge is narrower [-]
+  int max_saturated = 16;         ///< longest saturated run still measured [px]
+  double full_scale = 0.0;        ///< the image's white [DN]; 0: 255 for 8-bit, 65535 for 16-bit
+  std::string frame_id = "multislit_camera";  ///< header.frame_id of the clouds
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// Counts of one extraction.
+struct ExtractionStats {
+  std::size_t reference_points = 0;  ///< points the reference offers
+  std::size_t valid = 0;             ///< points measured
+};
+
+class Extractor {
+ public:
+  explicit Extractor(Reference reference, const ExtractorConfig& config = {});
+
+  const Reference& reference() const { return reference_; }
+  const ExtractorConfig& config() const { return config_; }
+
+  /// The RDMap of `image`: one cloud row per slit, one column per reference row of that slit
+  /// (column j of slit i is image row first_row_i + j); NaN where nothing valid was measured.
+  /// x, y, z in metres in the camera frame when the reference has a metric scale (else NaN).
+  /// Throws std::invalid_argument when the image does not fit the reference.
+  ExtractionStats extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const;
+  /// Same, with the PCL header set: stamp in microseconds since the epoch, seq, frame_id.
+  pcl::PointCloud<PointRDM>::Ptr extract(const cv::Mat& image, std::uint64_t stamp_us,
+                                         std::uint32_t seq) const;
+
+ private:
+  template <typename T>
+  void extractRows(const cv::Mat& image, const ProfileParams& params,
+                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
+
+  Reference reference_;
+  ExtractorConfig config_;
+};
+
+}  // namespace multislit

@@ -1,0 +1,108 @@
+#include "multislit/extractor.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace multislit {
+
+void ExtractorConfig::validate() const {
+  auto require = [](bool ok, const char* field, const char* rule) {
+    if (!ok) throw std::invalid_argument(std::string("extractor config: ") + field + " " + rule);
+  };
+  require(min_contrast > 0 && min_contrast < 1, "min_contrast", "must be in (0, 1) of full scale");
+  require(max_width_factor >= 1, "max_width_factor", "must be >= 1");
+  require(min_width_factor >= 0 && min_width_factor <= 1, "min_width_factor", "must be in [0, 1]");
+  require(max_saturated >= 0, "max_saturated", "must be >= 0 px");
+  require(full_scale >= 0, "full_scale", "must be >= 0 (0: from the image type)");
+}
+
+Extractor::Extractor(Reference reference, const ExtractorConfig& config)
+    : reference_(std::move(reference)), config_(config) {
+  config_.validate();
+  if (reference_.slits.empty() || reference_.region_width < 3)
+    throw std::invalid_argument("extractor: the reference has no slits or no assigned regions");
+}
+
+template <typename T>
+void Extractor::extractRows(const cv::Mat& image, const ProfileParams& params,
+                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
+  const MetricScale& scale = reference_.scale;
+  const bool metric = scale.valid();
+  const double half = 0.5 * reference_.region_width;
+  for (std::size_t s = 0; s < reference_.slits.size(); ++s) {
+    const ReferenceSlit& slit = reference_.slits[s];
+    const bool has_inf = metric && slit.u_inf.size() == slit.u.size();
+    for (std::size_t k = 0; k < slit.u.size(); ++k) {
+      const float u = slit.u[k];
+      if (!std::isfinite(u)) continue;
+      ++stats.reference_points;
+      const int row = slit.first_row + static_cast<int>(k);
+      // Search the slit only inside this point's assigned region on its row (Fig. 7).
+      Peak peak;
+      if (!measurePeak(image.ptr<T>(row), image.cols, static_cast<int>(std::ceil(u - half)),
+                       static_cast<int>(std::floor(u + half)), params, &peak))
+        continue;
+      PointRDM& p = cloud.at(static_cast<int>(k), static_cast<int>(s));
+      p.dk = static_cast<float>(peak.centre - u);
+      if (has_inf && std::isfinite(slit.u_inf[k])) {
+        const double depth = scale.disparity_constant / (peak.centre - slit.u_inf[k]);
+        if (depth > 0) {
+          p.x = static_cast<float>((peak.centre - scale.cx) * depth / scale.f);
+          p.y = static_cast<float>((row - scale.cy) * depth / scale.f);
+          p.z = static_cast<float>(depth);
+        }
+      }
+      ++stats.valid;
+    }
+  }
+}
+
+ExtractionStats Extractor::extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const {
+  reference_.checkImage(image, "image");
+  const double full =
+      config_.full_scale > 0 ? config_.full_scale : (image.depth() == CV_8U ? 255.0 : 65535.0);
+  ProfileParams params;
+  params.estimator = config_.estimator;
+  params.min_contrast = config_.min_contrast * full;
+  params.saturation = full;
+  params.max_saturated = config_.max_saturated;
+  params.min_width = config_.min_width_factor * reference_.profile_width;
+  params.max_width = config_.max_width_factor * reference_.profile_width;
+  params.half_window = std::max(3, static_cast<int>(std::lround(1.25 * reference_.profile_width)));
+  params.window_sigma = reference_.profile_width / 2.3548;  // FWHM to sigma
+
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  cloud.width = static_cast<std::uint32_t>(reference_.maxSlitLength());
+  cloud.height = static_cast<std::uint32_t>(reference_.slits.size());
+  cloud.is_dense = false;
+  cloud.points.resize(static_cast<std::size_t>(cloud.width) * cloud.height);
+  for (std::size_t s = 0; s < reference_.slits.size(); ++s) {
+    const ReferenceSlit& slit = reference_.slits[s];
+    for (std::uint32_t k = 0; k < cloud.width; ++k) {
+      PointRDM& p = cloud.at(static_cast<int>(k), static_cast<int>(s));
+      p.x = p.y = p.z = p.dk = nan;
+      p.u = k < slit.u.size() ? slit.u[k] : nan;
+      p.v = static_cast<float>(slit.first_row + static_cast<int>(k));
+      p.slit = static_cast<std::int32_t>(s);
+    }
+  }
+  ExtractionStats stats;
+  if (image.depth() == CV_8U)
+    extractRows<uint8_t>(image, params, cloud, stats);
+  else
+    extractRows<uint16_t>(image, params, cloud, stats);
+  return stats;
+}
+
+pcl::PointCloud<PointRDM>::Ptr Extractor::extract(const cv::Mat& image, std::uint64_t stamp_us,
+                                                  std::uint32_t seq) const {
+  auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
+  extract(image, *cloud);
+  cloud->header.stamp = stamp_us;
+  cloud->header.seq = seq;
+  cloud->header.frame_id = config_.frame_id;
+  return cloud;
+}
+
+}  // namespace multislit

@@ -1,0 +1,485 @@
+#include "multislit/reference.h"
+
+#include "yaml_io.h"
+
+#include <Eigen/Dense>
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace multislit {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+struct Centre {
+  int row;
+  double u, width;
+};
+
+// A slit being followed down the image, row by row.
+struct Track {
+  std::vector<Centre> points;
+  double predict(int row) const {  // linear extrapolation over the last few rows
+    const Centre& b = points.back();
+    if (points.size() < 2) return b.u;
+    const Centre& a = points[points.size() - std::min<std::size_t>(points.size(), 8)];
+    if (a.row == b.row) return b.u;
+    return b.u + (b.u - a.u) / (b.row - a.row) * (row - b.row);
+  }
+};
+
+ProfileParams detectionParams(const cv::Mat& image, const ReferenceConfig& c) {
+  const double full = image.depth() == CV_8U ? 255.0 : 65535.0;
+  ProfileParams p;
+  p.estimator = c.estimator;
+  p.min_contrast = c.min_contrast * full;
+  p.saturation = full;
+  return p;
+}
+
+// 1. Every row: local maxima that stand out, measured to sub-pixel precision.
+template <typename T>
+std::vector<std::vector<Centre>> rowCentres(const cv::Mat& image, const ProfileParams& p) {
+  std::vector<std::vector<Centre>> rows(static_cast<std::size_t>(image.rows));
+  const int w = p.half_window, n = image.cols;
+  for (int r = 0; r < image.rows; ++r) {
+    const T* row = image.ptr<T>(r);
+    int last_kept = -1000;
+    double last_value = 0;
+    for (int x = 1; x + 1 < n; ++x) {
+      if (!(row[x] > row[x - 1] && row[x] >= row[x + 1])) continue;
+      const double base = std::min(row[std::max(0, x - w - 2)], row[std::min(n - 1, x + w + 2)]);
+      if (row[x] - base < p.min_contrast) continue;
+      Peak peak;
+      if (!measurePeakAt(row, n, x, p, &peak)) continue;
+      auto& out = rows[static_cast<std::size_t>(r)];
+      if (x - last_kept <= 2 * w && !out.empty()) {  // two maxima of one profile: keep the higher
+        if (row[x] <= last_value) continue;
+        out.pop_back();
+      }
+      out.push_back({r, peak.centre, peak.width});
+      last_kept = x;
+      last_value = row[x];
+    }
+  }
+  return rows;
+}
+
+// 2. Link centres of consecutive rows into tracks, then join tracks across gaps.
+std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int max_gap) {
+  constexpr double kTolerance = 4.0, kFirstStep = 15.0;  // [px]
+  std::vector<Track> open, done;
+  for (const auto& centres : rows) {
+    if (centres.empty()) continue;
+    const int row = centres.front().row;
+    std::vector<bool> used(centres.size(), false);
+    for (Track& t : open) {
+      const double tol = t.points.size() < 2 ? kFirstStep : kTolerance;
+      int best = -1;
+      double best_d = tol;
+      for (std::size_t k = 0; k < centres.size(); ++k) {
+        const double d = std::abs(centres[k].u - t.predict(row));
+        if (!used[k] && d < best_d) best = static_cast<int>(k), best_d = d;
+      }
+      if (best >= 0) {
+        t.points.push_back(centres[static_cast<std::size_t>(best)]);
+        used[static_cast<std::size_t>(best)] = true;
+      }
+    }
+    for (std::size_t k = 0; k < centres.size(); ++k)
+      if (!used[k]) open.push_back(Track{{centres[k]}});
+    // Close tracks that have not grown for longer than a gap.
+    for (auto it = open.begin(); it != open.end();) {
+      if (row - it->points.back().row > max_gap) {
+        done.push_back(std::move(*it));
+        it = open.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  done.insert(done.end(), open.begin(), open.end());
+  return done;
+}
+
+// 3. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve.
+Eigen::VectorXd fitSlit(const std::vector<Centre>& pts, int degree, double mid, double half,
+                        std::vector<bool>* inlier) {
+  const int n = static_cast<int>(pts.size());
+  inlier->assign(pts.size(), true);
+  Eigen::VectorXd coef = Eigen::VectorXd::Zero(degree + 1);
+  for (int pass = 0; pass < 4; ++pass) {
+    Eigen::MatrixXd a(n, degree + 1);
+    Eigen::VectorXd b(n);
+    for (int i = 0; i < n; ++i) {
+      const double s = (pts[static_cast<std::size_t>(i)].row - mid) / half;
+      const double w = (*inlier)[static_cast<std::size_t>(i)] ? 1.0 : 0.0;
+      double p = 1;
+      for (int k = 0; k <= degree; ++k, p *= s) a(i, k) = w * p;
+      b(i) = w * pts[static_cast<std::size_t>(i)].u;
+    }
+    coef = a.colPivHouseholderQr().solve(b);
+    double ss = 0;
+    int m = 0;
+    std::vector<double> res(pts.size());
+    for (int i = 0; i < n; ++i) {
+      const double s = (pts[static_cast<std::size_t>(i)].row - mid) / half;
+      double p = 1, u = 0;
+      for (int k = 0; k <= degree; ++k, p *= s) u += coef(k) * p;
+      res[static_cast<std::size_t>(i)] = pts[static_cast<std::size_t>(i)].u - u;
+      if ((*inlier)[static_cast<std::size_t>(i)])
+        ss += res[static_cast<std::size_t>(i)] * res[static_cast<std::size_t>(i)], ++m;
+    }
+    const double limit = std::max(0.3, 3.0 * std::sqrt(ss / std::max(m, 1)));
+    for (int i = 0; i < n; ++i)
+      (*inlier)[static_cast<std::size_t>(i)] = std::abs(res[static_cast<std::size_t>(i)]) <= limit;
+  }
+  return coef;
+}
+
+struct DetectedSlits {
+  std::vector<ReferenceSlit> slits;
+  double profile_width = 0, smoothing_rms = 0;
+};
+
+std::string describe(const std::vector<Track>& tracks) {
+  std::ostringstream s;
+  for (std::size_t k = 0; k < tracks.size() && k < 20; ++k)
+    s << (k ? ", " : "") << "rows " << tracks[k].points.front().row << "-"
+      << tracks[k].points.back().row;
+  if (tracks.size() > 20) s << ", ...";
+  return s.str();
+}
+
+DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
+                          const std::string& what) {
+  const ProfileParams params = detectionParams(image, config);
+  const auto rows = image.depth() == CV_8U ? rowCentres<uint8_t>(image, params)
+                                           : rowCentres<uint16_t>(image, params);
+  std::vector<Track> tracks = linkTracks(rows, config.max_gap);
+  tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
+                              [&](const Track& t) {
+                                return static_cast<int>(t.points.size()) < config.min_rows;
+                              }),
+               tracks.end());
+  if (static_cast<int>(tracks.size()) != config.expected_slits) {
+    std::ostringstream msg;
+    msg << what << ": found " << tracks.size() << " slits, expected " << config.expected_slits;
+    if (!tracks.empty()) msg << " (" << describe(tracks) << ")";
+    if (tracks.empty()) msg << ": is the laser on, and is this an image of a plane?";
+    throw std::runtime_error(msg.str());
+  }
+  // Order the slits across their direction: the projector's fan runs down and to the right.
+  Eigen::Vector2d along = Eigen::Vector2d::Zero();
+  for (const Track& t : tracks)
+    along += Eigen::Vector2d(t.points.back().u - t.points.front().u,
+                             t.points.back().row - t.points.front().row);
+  Eigen::Vector2d normal(along.y(), -along.x());
+  if (normal.x() + normal.y() < 0) normal = -normal;
+  auto across = [&](const Track& t) {
+    const Centre& m = t.points[t.points.size() / 2];
+    return normal.dot(Eigen::Vector2d(m.u, m.row));
+  };
+  std::sort(tracks.begin(), tracks.end(),
+            [&](const Track& a, const Track& b) { return across(a) < across(b); });
+
+  DetectedSlits out;
+  std::vector<double> widths;
+  double ss = 0;
+  std::size_t m = 0;
+  for (const Track& t : tracks) {
+    ReferenceSlit slit;
+    slit.first_row = t.points.front().row;
+    const int last = t.points.back().row;
+    slit.u.assign(static_cast<std::size_t>(last - slit.first_row + 1), kNaN);
+    for (const Centre& c : t.points) widths.push_back(c.width);
+    if (config.smoothing_degree > 0) {
+      const double mid = 0.5 * (slit.first_row + last),
+                   half = std::max(1.0, 0.5 * (last - slit.first_row));
+      std::vector<bool> inlier;
+      const Eigen::VectorXd coef = fitSlit(t.points, config.smoothing_degree, mid, half, &inlier);
+      // Near its ends a slit is cut inside the row profile, which narrows the profile and pulls
+      // its centre inwards: such rows are dropped until the slit runs clean.
+      std::vector<double> w;
+      for (const Centre& c : t.points) w.push_back(c.width);
+      std::nth_element(w.begin(), w.begin() + static_cast<long>(w.size() / 2), w.end());
+      const double narrow = 0.85 * w[w.size() / 2];
+      auto clean = [&](std::size_t i) { return inlier[i] && t.points[i].width >= narrow; };
+      std::size_t begin = 0, end = t.points.size();
+      while (begin < end && !clean(begin)) ++begin;
+      while (end > begin && !clean(end - 1)) --end;
+      if (end - begin < static_cast<std::size_t>(config.min_rows)) continue;
+      slit.first_row = t.points[begin].row;
+      const int kept_last = t.points[end - 1].row;
+      slit.u.assign(static_cast<std::size_t>(kept_last - slit.first_row + 1), kNaN);
+      for (int r = slit.first_row; r <= kept_last; ++r) {
+        const double s = (r - mid) / half;
+        double p = 1, u = 0;
+        for (int k = 0; k <= config.smoothing_degree; ++k, p *= s) u += coef(k) * p;
+        slit.u[static_cast<std::size_t>(r - slit.first_row)] = static_cast<float>(u);
+      }
+      for (std::size_t i = begin; i < end; ++i) {
+        if (!inlier[i]) continue;
+        const double d =
+            t.points[i].u - slit.u[static_cast<std::size_t>(t.points[i].row - slit.first_row)];
+        ss += d * d;
+        ++m;
+      }
+    } else {
+      for (const Centre& c : t.points)
+        slit.u[static_cast<std::size_t>(c.row - slit.first_row)] = static_cast<float>(c.u);
+    }
+    out.slits.push_back(std::move(slit));
+  }
+  std::nth_element(widths.begin(), widths.begin() + static_cast<long>(widths.size() / 2),
+                   widths.end());
+  out.profile_width = widths[widths.size() / 2];
+  out.smoothing_rms = m ? std::sqrt(ss / static_cast<double>(m)) : 0.0;
+  return out;
+}
+
+// 4. The widest constant region that overlaps no neighbour on any row (Fig. 7).
+int widestRegion(const std::vector<ReferenceSlit>& slits, int image_height) {
+  double min_gap = std::numeric_limits<double>::infinity();
+  std::vector<float> on_row;
+  for (int r = 0; r < image_height; ++r) {
+    on_row.clear();
+    for (const ReferenceSlit& s : slits)
+      if (r >= s.first_row && r <= s.lastRow() &&
+          std::isfinite(s.u[static_cast<std::size_t>(r - s.first_row)]))
+        on_row.push_back(s.u[static_cast<std::size_t>(r - s.first_row)]);
+    std::sort(on_row.begin(), on_row.end());
+    for (std::size_t k = 1; k < on_row.size(); ++k)
+      min_gap = std::min<double>(min_gap, on_row[k] - on_row[k - 1]);
+  }
+  // Regions [u - W/2, u + W/2] of neighbours share no column when W <= gap - 1.
+  return std::isfinite(min_gap) ? static_cast<int>(std::floor(min_gap)) - 1 : 0;
+}
+
+}  // namespace
+
+void ReferenceConfig::validate() const {
+  auto require = [](bool ok, const char* field, const char* rule) {
+    if (!ok) throw std::invalid_argument(std::string("reference config: ") + field + " " + rule);
+  };
+  require(expected_slits >= 1 && expected_slits <= 64, "expected_slits", "must be in [1, 64]");
+  require(region_width >= 0, "region_width", "must be >= 0 (0: automatic)");
+  require(min_contrast > 0 && min_contrast < 1, "min_contrast", "must be in (0, 1) of full scale");
+  require(min_rows >= 3, "min_rows", "must be >= 3");
+  require(max_gap >= 1, "max_gap", "must be >= 1");
+  require(smoothing_degree >= 0 && smoothing_degree <= 8, "smoothing_degree", "must be in [0, 8]");
+}
+
+Reference Reference::fromImage(const cv::Mat& image, const ReferenceConfig& config) {
+  config.validate();
+  if (image.empty()) throw std::runtime_error("reference image is empty");
+  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U))
+    throw std::runtime_error("reference image must be 8- or 16-bit with one channel");
+  Reference ref;
+  ref.image_width = image.cols;
+  ref.image_height = image.rows;
+  DetectedSlits found = detectSlits(image, config, "reference image");
+  ref.slits = std::move(found.slits);
+  ref.profile_width = found.profile_width;
+  ref.smoothing_rms = found.smoothing_rms;
+  ref.max_region_width = widestRegion(ref.slits, image.rows);
+  if (ref.max_region_width < 3)
+    throw std::runtime_error("reference image: the slits are too close for any assigned region");
+  if (config.region_width > ref.max_region_width)
+    throw std::invalid_argument("region_width " + std::to_string(config.region_width) +
+                                " px would overlap the neighbours: at most " +
+                                std::to_string(ref.max_region_width) + " px");
+  ref.region_width = config.region_width > 0 ? config.region_width : ref.max_region_width;
+  return ref;
+}
+
+std::size_t Reference::pointCount() const {
+  std::size_t n = 0;
+  for (const ReferenceSlit& s : slits)
+    n += static_cast<std::size_t>(
+        std::count_if(s.u.begin(), s.u.end(), [](float u) { return std::isfinite(u); }));
+  return n;
+}
+
+int Reference::maxSlitLength() const {
+  int n = 0;
+  for (const ReferenceSlit& s : slits) n = std::max(n, static_cast<int>(s.u.size()));
+  return n;
+}
+
+void Reference::checkImage(const cv::Mat& image, const std::string& what) const {
+  if (image.empty()) throw std::invalid_argument(what + ": empty image");
+  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U))
+    throw std::invalid_argument(what + ": must be an 8- or 16-bit image with one channel");
+  if (image.cols != image_width || image.rows != image_height)
+    throw std::invalid_argument(
+        what + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+        " but the reference was taken with a " + std::to_string(image_width) + "x" +
+        std::to_string(image_height) + " camera");
+}
+
+void Reference::setNominalScale(const SensorConfig& sensor, const MountConfig& reference_mount) {
+  if (sensor.camera.width != image_width || sensor.camera.height != image_height)
+    throw std::invalid_argument("sensor config: camera is " + std::to_string(sensor.camera.width) +
+                                "x" + std::to_string(sensor.camera.height) +
+                                " but the reference image is " + std::to_string(image_width) + "x" +
+                                std::to_string(image_height));
+  const SensorGeometry g(sensor);
+  scale.f = sensor.camera.f();
+  scale.cx = sensor.camera.cx();
+  scale.cy = sensor.camera.cy();
+  scale.disparity_constant = scale.f * sensor.projector.baseline;
+  scale.source = "nominal";
+  // The reference plane (the floor) in the camera frame: n . X = d.
+  const Eigen::Isometry3d camera_from_robot = g.robotFromCamera(reference_mount).inverse();
+  const Eigen::Vector3d n = camera_from_robot.linear() * Eigen::Vector3d::UnitZ();
+  const double d = n.dot(camera_from_robot.translation());
+  for (ReferenceSlit& s : slits) {
+    s.u_inf.assign(s.u.size(), kNaN);
+    for (std::size_t k = 0; k < s.u.size(); ++k) {
+      const double depth = d / n.dot(g.pixelRay(s.u[k], s.first_row + static_cast<double>(k)));
+      if (depth > 0) s.u_inf[k] = static_cast<float>(s.u[k] - scale.disparity_constant / depth);
+    }
+  }
+}
+
+double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
+                                      const std::vector<double>& depths, const CameraConfig& camera,
+                                      const ReferenceConfig& config) {
+  if (images.size() != depths.size() || images.size() < 2)
+    throw std::invalid_argument("calibration needs images of a plane at two or more known depths");
+  std::vector<std::vector<ReferenceSlit>> seen;
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const std::string what =
+        "plane image " + std::to_string(k + 1) + " (" + std::to_string(depths[k]) + " m)";
+    checkImage(images[k], what);
+    if (!(depths[k] > 0)) throw std::invalid_argument(what + ": depth must be > 0");
+    seen.push_back(detectSlits(images[k], config, what).slits);
+  }
+  // u_k = u_inf + K / Z_k for every reference point: one K for all, u_inf per point.
+  struct Obs {
+    std::size_t slit, row;
+    std::vector<std::pair<double, double>> wu;  // (1 / Z, u)
+  };
+  std::vector<Obs> obs;
+  for (std::size_t s = 0; s < slits.size(); ++s)
+    for (std::size_t r = 0; r < slits[s].u.size(); ++r) {
+      Obs o{s, r, {}};
+      const int row = slits[s].first_row + static_cast<int>(r);
+      for (std::size_t k = 0; k < seen.size(); ++k) {
+        const ReferenceSlit& p = seen[k][s];
+        if (row < p.first_row || row > p.lastRow()) continue;
+        const float u = p.u[static_cast<std::size_t>(row - p.first_row)];
+        if (std::isfinite(u)) o.wu.emplace_back(1.0 / depths[k], u);
+      }
+      obs.push_back(std::move(o));
+    }
+  double num = 0, den = 0;
+  for (const Obs& o : obs) {
+    if (o.wu.size() < 2) continue;
+    double mw = 0, mu = 0;
+    for (const auto& [w, u] : o.wu) mw += w, mu += u;
+    mw /= static_cast<double>(o.wu.size());
+    mu /= static_cast<double>(o.wu.size());
+    for (const auto& [w, u] : o.wu) num += (u - mu) * (w - mw), den += (w - mw) * (w - mw);
+  }
+  if (!(den > 0) || !(num > 0))
+    throw std::runtime_error(
+        "calibration: the plane images do not constrain the scale (same depths?)");
+  const double k_fb = num / den;
+  double ss = 0;
+  std::size_t m = 0;
+  for (ReferenceSlit& s : slits) s.u_inf.assign(s.u.size(), kNaN);
+  for (const Obs& o : obs) {
+    if (o.wu.size() < 2) continue;
+    double mw = 0, mu = 0;
+    for (const auto& [w, u] : o.wu) mw += w, mu += u;
+    mw /= static_cast<double>(o.wu.size());
+    mu /= static_cast<double>(o.wu.size());
+    const double u_inf = mu - k_fb * mw;
+    slits[o.slit].u_inf[o.row] = static_cast<float>(u_inf);
+    for (const auto& [w, u] : o.wu) ss += (u - u_inf - k_fb * w) * (u - u_inf - k_fb * w), ++m;
+  }
+  scale.f = camera.f();
+  scale.cx = camera.cx();
+  scale.cy = camera.cy();
+  scale.disparity_constant = k_fb;
+  scale.source = "planes";
+  return std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1)));
+}
+
+void Reference::save(const std::string& path) const {
+  cv::FileStorage fs = openYamlForWrite(path, "calibration");
+  fs << "image_width" << image_width << "image_height" << image_height;
+  fs << "camera_id" << camera_id;
+  fs << "region_width" << region_width << "max_region_width" << max_region_width;
+  fs << "profile_width" << profile_width << "smoothing_rms" << smoothing_rms;
+  fs << "scale"
+     << "{"
+     << "source" << scale.source << "f" << scale.f << "cx" << scale.cx << "cy" << scale.cy
+     << "disparity_constant" << scale.disparity_constant << "}";
+  fs << "slits"
+     << "[";
+  for (const ReferenceSlit& s : slits) {
+    fs << "{"
+       << "first_row" << s.first_row << "u" << s.u;
+    if (!s.u_inf.empty()) fs << "u_inf" << s.u_inf;
+    fs << "}";
+  }
+  fs << "]";
+}
+
+Reference Reference::load(const std::string& path) {
+  cv::FileStorage fs = openYamlForRead(path, "calibration");
+  Reference ref;
+  try {
+    const cv::FileNode root = fs.root();
+    readField(root, "image_width", ref.image_width);
+    readField(root, "image_height", ref.image_height);
+    readField(root, "camera_id", ref.camera_id);
+    readField(root, "region_width", ref.region_width);
+    readField(root, "max_region_width", ref.max_region_width);
+    readField(root, "profile_width", ref.profile_width);
+    readField(root, "smoothing_rms", ref.smoothing_rms);
+    const cv::FileNode sc = fs["scale"];
+    readField(sc, "source", ref.scale.source);
+    readField(sc, "f", ref.scale.f);
+    readField(sc, "cx", ref.scale.cx);
+    readField(sc, "cy", ref.scale.cy);
+    readField(sc, "disparity_constant", ref.scale.disparity_constant);
+    if (ref.image_width <= 0 || ref.image_height <= 0)
+      throw std::invalid_argument("image_width and image_height must be > 0");
+    if (ref.region_width < 3) throw std::invalid_argument("region_width must be >= 3");
+    const cv::FileNode list = fs["slits"];
+    if (!list.isSeq() || list.size() == 0)
+      throw std::invalid_argument("'slits' must be a non-empty list");
+    for (const cv::FileNode& n : list) {
+      ReferenceSlit s;
+      readField(n, "first_row", s.first_row);
+      n["u"] >> s.u;
+      if (!n["u_inf"].empty()) n["u_inf"] >> s.u_inf;
+      if (s.u.empty())
+        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) + ": 'u' is empty");
+      if (!s.u_inf.empty() && s.u_inf.size() != s.u.size())
+        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) +
+                                    ": 'u_inf' and 'u' differ in length");
+      if (s.first_row < 0 || s.lastRow() >= ref.image_height)
+        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) +
+                                    ": rows outside the image");
+      ref.slits.push_back(std::move(s));
+    }
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("calibration '" + path + "': " + e.what());
+  } catch (const cv::Exception& e) {
+    throw std::invalid_argument("calibration '" + path + "': " + e.err);
+  }
+  return ref;
+}
+
+}  // namespace multislit
