@@ -1,0 +1,78 @@
+// Floor and obstacles in an RDMap (paper Sec. III-B): RANSAC on the plane dk = A u + B v + C
+// (eq. 1) with q iterations from eq. (3), least-squares refit on the inliers (eq. 2), then every
+// point farther than the threshold from the plane is an obstacle. By default each new best RANSAC
+// plane is refit on its inliers before it is scored (LO-RANSAC), see FloorDetectorConfig.
+#pragma once
+
+#include "multislit/point_types.h"
+
+#include <pcl/point_cloud.h>
+#include <pcl/types.h>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+namespace multislit {
+
+/// eq. (3) solved for q: the number of RANSAC iterations that draw at least one sample free of
+/// outliers with probability `probability`, q = ceil(log(1 - P) / log(1 - (1 - eps)^F)), with eps
+/// = `outlier_ratio` and F = `sample_size`. 35 for P = 0.99, eps = 0.5, F = 3 (the paper's q).
+/// Throws std::invalid_argument unless 0 < P < 1, 0 <= eps < 1 and F >= 1.
+int ransacIterations(double probability, double outlier_ratio, int sample_size = 3);
+
+struct FloorDetectorConfig {
+  double sigma = 0.3;             ///< std of the relative disparity of the sensor (Sec. IV) [px]
+  double threshold_sigmas = 3.0;  ///< floor / obstacle threshold, in sigmas (3 sigma = 0.9 px) [-]
+  double probability = 0.99;      ///< P of eq. (3): chance of drawing one clean sample [-]
+  double outlier_ratio = 0.5;     ///< eps of eq. (3): assumed share of non-floor points [-]
+  int max_iterations = 0;         ///< RANSAC iterations q; 0: from eq. (3) (35 by default) [-]
+  int min_points = 50;            ///< fewer valid points: the floor is not found [-]
+  double min_inlier_ratio =
+      0.3;                 ///< fewer floor points than this share of the valid: not found [-]
+  unsigned seed = 12345u;  ///< seed of the sample draws; a seed and a cloud give one result
+  /// Refit each new best RANSAC plane on its inliers (eq. 2) and score the refit (LO-RANSAC);
+  /// false: the paper's plain RANSAC, which picks a wrong plane more often when obstacles are
+  /// large.
+  bool local_refit = true;
+
+  double threshold() const { return sigma * threshold_sigmas; }  ///< [px]
+  /// q: max_iterations, or eq. (3) when it is 0.
+  int iterations() const;
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+struct FloorResult {
+  bool found = false;  ///< false: no floor (too few points, or too few on one plane); no guess
+  Eigen::Vector3d plane = Eigen::Vector3d::Zero();  ///< (A, B, C): dk = A u + B v + C [-, -, px]
+  pcl::Indices inliers;    ///< cloud indices of the floor points, |residual| <= threshold
+  pcl::Indices obstacles;  ///< cloud indices of the valid points off the floor
+  /// Signed residual dk - (A u + B v + C) of each obstacle, parallel to `obstacles` [px];
+  /// > 0: above the floor (nearer to the sensor), < 0: below it (a hole or a step down).
+  std::vector<float> obstacle_residuals;
+  double residual_std = std::numeric_limits<double>::quiet_NaN();  ///< RMS over the floor [px]
+  std::size_t valid_points = 0;  ///< points with finite u, v and dk
+  int iterations = 0;            ///< RANSAC iterations run
+};
+
+/// The floor of an RDMap and the points off it. Thread-safe: detect() keeps no state.
+class FloorDetector {
+ public:
+  explicit FloorDetector(const FloorDetectorConfig& config = {});  ///< validates `config`
+
+  const FloorDetectorConfig& config() const { return config_; }
+
+  /// Floor and obstacles among all valid points of `cloud`.
+  FloorResult detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud) const;
+  /// Floor and obstacles among the valid points of cloud[indices]; result indices index `cloud`.
+  FloorResult detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
+                     const pcl::Indices& indices) const;
+
+ private:
+  FloorDetectorConfig config_;
+  int iterations_ = 0;
+};
+
+}  // namespace multislit

@@ -1,0 +1,128 @@
+// The plane of an RDMap, dk = A u + B v + C (paper eq. 1), as a PCL sample-consensus model.
+// Works with pcl::RandomSampleConsensus, MEstimatorSampleConsensus and LeastMedianSquares (their
+// PointRDM instantiations live in src/pcl_instantiations.cpp).
+#pragma once
+
+#include "multislit/point_types.h"
+
+#include <pcl/point_cloud.h>
+#include <pcl/sample_consensus/sac_model.h>
+#include <pcl/types.h>
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <set>
+#include <vector>
+
+namespace multislit {
+
+/// Model id returned by SampleConsensusModelRDMapPlane::getModelType(). pcl::SacModel has no slot
+/// for user models and PCL never dispatches on this value for a model object it is handed, so we
+/// use 31: the largest value pcl::SacModel can hold (its enumerators 0 .. 18 need 5 bits), far from
+/// PCL's own ids. Never pass it to pcl::SACSegmentation::setModelType.
+constexpr int kSacModelRDMapPlane = 31;
+
+/// True when the point was measured: u, v and dk are finite.
+inline bool isValidRDMPoint(const PointRDM& p) {
+  return std::isfinite(p.u) && std::isfinite(p.v) && std::isfinite(p.dk);
+}
+
+/// Least-squares plane of eq. (2) through some points of an RDMap.
+struct RDMapPlaneFit {
+  bool ok = false;                                  ///< false: fewer than 3 points or degenerate
+  Eigen::Vector3d plane = Eigen::Vector3d::Zero();  ///< (A, B, C): dk = A u + B v + C [-, -, px]
+  double residual_std = 0.0;  ///< RMS of dk - (A u + B v + C) over the points [px]
+  std::size_t points = 0;     ///< points used (invalid points among `indices` are skipped)
+};
+
+/// eq. (2): the least-squares plane dk = A u + B v + C through cloud[indices] (invalid points are
+/// skipped).
+RDMapPlaneFit fitRDMapPlane(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& indices);
+
+/// The RDMap plane dk = A u + B v + C as a PCL sample-consensus model. Coefficients: (A, B, C).
+/// The distance of a point to the model is its residual along dk, |dk - (A u + B v + C)| [px], not
+/// the orthogonal distance. A sample is three valid points of three different slits that are not
+/// collinear in (u, v) (paper Sec. III-B). Invalid points (non-finite u, v or dk) are never
+/// inliers: setInputCloud() keeps only the valid points as indices, and points given later by
+/// setIndices() that are invalid get an infinite distance. As with PCL's models, change the indices
+/// through setIndices(), not by writing into the vector getIndices() returns.
+class SampleConsensusModelRDMapPlane : public pcl::SampleConsensusModel<PointRDM> {
+ public:
+  using PointCloud = pcl::PointCloud<PointRDM>;
+  using PointCloudConstPtr = PointCloud::ConstPtr;
+  using Ptr = std::shared_ptr<SampleConsensusModelRDMapPlane>;
+  using ConstPtr = std::shared_ptr<const SampleConsensusModelRDMapPlane>;
+
+  /// Uses all valid points of `cloud`. `random`: seed the sampler from the clock, else with 12345.
+  explicit SampleConsensusModelRDMapPlane(const PointCloudConstPtr& cloud, bool random = false);
+  /// Uses the valid points among `indices`.
+  SampleConsensusModelRDMapPlane(const PointCloudConstPtr& cloud, const pcl::Indices& indices,
+                                 bool random = false);
+
+  /// Sets the cloud and makes the indices all of its valid points (any earlier indices are
+  /// dropped, unlike PCL's base class, which keeps indices that belong to the previous cloud).
+  void setInputCloud(const PointCloudConstPtr& cloud) override;
+
+  /// Restarts the sample draws from `seed`: the same seed and cloud give the same samples.
+  void setSeed(unsigned seed);
+
+  /// Solves dk = A u + B v + C through the three samples.
+  bool computeModelCoefficients(const pcl::Indices& samples,
+                                Eigen::VectorXf& model_coefficients) const override;
+  /// eq. (2): least-squares refit on `inliers`; keeps `model_coefficients` when that fails.
+  void optimizeModelCoefficients(const pcl::Indices& inliers,
+                                 const Eigen::VectorXf& model_coefficients,
+                                 Eigen::VectorXf& optimized_coefficients) const override;
+  /// |dk - (A u + B v + C)| [px] of every index; +infinity for an invalid point.
+  void getDistancesToModel(const Eigen::VectorXf& model_coefficients,
+                           std::vector<double>& distances) const override;
+  void selectWithinDistance(const Eigen::VectorXf& model_coefficients, double threshold,
+                            pcl::Indices& inliers) override;
+  std::size_t countWithinDistance(const Eigen::VectorXf& model_coefficients,
+                                  double threshold) const override;
+  /// Moves the inliers onto the plane along dk (dk = A u + B v + C); x, y, z are left as they are
+  /// (the model knows no sensor geometry). With copy_data_fields the whole cloud is copied, so an
+  /// organized cloud stays organized; else only the inliers are returned.
+  void projectPoints(const pcl::Indices& inliers, const Eigen::VectorXf& model_coefficients,
+                     PointCloud& projected_points, bool copy_data_fields = true) const override;
+  bool doSamplesVerifyModel(const std::set<pcl::index_t>& indices,
+                            const Eigen::VectorXf& model_coefficients,
+                            double threshold) const override;
+
+  /// countWithinDistance() when that is more than `best`; else some number <= `best`, found
+  /// sooner: the count stops once the points left cannot lift it above `best` (RANSAC's bail-out).
+  std::size_t countWithinDistanceIfMore(const Eigen::VectorXf& model_coefficients, double threshold,
+                                        std::size_t best) const;
+  /// eq. (2) through the points within `threshold` [px] of the model, in one pass (the same
+  /// plane as selectWithinDistance() then fitRDMapPlane(), without the index list).
+  RDMapPlaneFit fitWithinDistance(const Eigen::VectorXf& model_coefficients,
+                                  double threshold) const;
+
+  /// kSacModelRDMapPlane cast to pcl::SacModel (see there).
+  pcl::SacModel getModelType() const override {
+    return static_cast<pcl::SacModel>(kSacModelRDMapPlane);
+  }
+
+ protected:
+  /// Three valid points of three different slits, not collinear in (u, v).
+  bool isSampleGood(const pcl::Indices& samples) const override;
+
+ private:
+  /// Keeps the valid points among indices_ and copies their u, v, dk, centred on their mean, into
+  /// contiguous arrays: the residual loops then run over memory in order and vectorize, and float
+  /// sums of centred values stay accurate.
+  void cacheValidPoints();
+  /// False once setIndices() replaced the cached indices: then the loops read the cloud.
+  bool cached() const { return indices_ == cached_indices_; }
+  /// C of the model for the centred arrays: dk - mean_dk = A (u - mean_u) + B (v - mean_v) + C'.
+  float centredC(const Eigen::VectorXf& model_coefficients) const;
+
+  pcl::IndicesPtr cached_indices_;
+  std::vector<float> u_, v_, dk_;  ///< of the points of cached_indices_, minus the means [px]
+  double mean_u_ = 0.0, mean_v_ = 0.0, mean_dk_ = 0.0;  ///< [px]
+};
+
+}  // namespace multislit

@@ -1,0 +1,155 @@
+#include "multislit/floor_detector.h"
+
+#include "multislit/plane_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace multislit {
+
+namespace {
+
+void require(bool ok, const std::string& field, const std::string& rule) {
+  if (!ok) throw std::invalid_argument("FloorDetectorConfig." + field + " " + rule);
+}
+
+/// Sec. III-B: q planes through three points of three different slits; the plane with the most
+/// points within `threshold` wins. With `local_refit`, each new best plane is replaced by the
+/// least-squares plane (eq. 2) of its inliers when that holds more points (LO-RANSAC): a plane
+/// through three noisy points is tilted, and the tilt grows with the distance from them. Returns
+/// false when no plane could be drawn.
+bool ransac(SampleConsensusModelRDMapPlane& model, int q, double threshold, bool local_refit,
+            Eigen::VectorXf& best, int& iterations) {
+  std::size_t best_count = 0;
+  Eigen::VectorXf candidate(3);
+  pcl::Indices sample;
+  for (iterations = 0; iterations < q; ++iterations) {
+    int unused = iterations;
+    model.getSamples(unused, sample);
+    if (sample.empty()) break;  // not three valid points on three slits
+    if (!model.computeModelCoefficients(sample, candidate)) continue;
+    const std::size_t count = model.countWithinDistanceIfMore(candidate, threshold, best_count);
+    if (count <= best_count) continue;
+    best_count = count;
+    best = candidate;
+    if (!local_refit) continue;
+    const RDMapPlaneFit fit = model.fitWithinDistance(candidate, threshold);
+    if (!fit.ok) continue;
+    const Eigen::VectorXf refit = fit.plane.cast<float>();
+    const std::size_t refit_count = model.countWithinDistanceIfMore(refit, threshold, best_count);
+    if (refit_count > best_count) {
+      best_count = refit_count;
+      best = refit;
+    }
+  }
+  return best_count > 0;
+}
+
+/// Every valid point of the model is floor (|residual| <= threshold) or obstacle.
+void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, double threshold,
+           FloorResult& result) {
+  const float a = static_cast<float>(result.plane[0]);
+  const float b = static_cast<float>(result.plane[1]);
+  const float c = static_cast<float>(result.plane[2]);
+  const float t = static_cast<float>(threshold);
+  result.inliers.reserve(valid.size());
+  double sum_sq = 0.0;
+  for (const auto i : valid) {
+    const PointRDM& p = cloud[i];
+    const float r = p.dk - (a * p.u + b * p.v + c);
+    if (std::abs(r) <= t) {
+      result.inliers.push_back(i);
+      sum_sq += static_cast<double>(r) * r;
+    } else {
+      result.obstacles.push_back(i);
+      result.obstacle_residuals.push_back(r);
+    }
+  }
+  if (!result.inliers.empty())
+    result.residual_std = std::sqrt(sum_sq / static_cast<double>(result.inliers.size()));
+}
+
+FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetectorConfig& config,
+                       int q) {
+  FloorResult result;
+  const pcl::Indices& valid = *model.getIndices();
+  result.valid_points = valid.size();
+  if (result.valid_points < static_cast<std::size_t>(config.min_points)) return result;
+  model.setSeed(config.seed);
+
+  // 1. RANSAC with q iterations (eq. 3) and the threshold 3 sigma.
+  Eigen::VectorXf best;
+  if (!ransac(model, q, config.threshold(), config.local_refit, best, result.iterations))
+    return result;
+
+  // 2. eq. (2): least-squares refit on the inliers of the best plane.
+  const RDMapPlaneFit fit = model.fitWithinDistance(best, config.threshold());
+  if (!fit.ok) return result;
+  result.plane = fit.plane;
+
+  // 3. Floor or obstacle, for every valid point, against the refit plane.
+  split(*model.getInputCloud(), valid, config.threshold(), result);
+
+  // 4. Fail safe: a plane carrying too few of the points is no floor.
+  if (static_cast<double>(result.inliers.size()) <
+      config.min_inlier_ratio * static_cast<double>(result.valid_points)) {
+    FloorResult not_found;
+    not_found.valid_points = result.valid_points;
+    not_found.iterations = result.iterations;
+    return not_found;
+  }
+  result.found = true;
+  return result;
+}
+
+}  // namespace
+
+int ransacIterations(double probability, double outlier_ratio, int sample_size) {
+  if (!(probability > 0.0 && probability < 1.0))
+    throw std::invalid_argument("ransacIterations: probability must be in (0, 1)");
+  if (!(outlier_ratio >= 0.0 && outlier_ratio < 1.0))
+    throw std::invalid_argument("ransacIterations: outlier_ratio must be in [0, 1)");
+  if (sample_size < 1) throw std::invalid_argument("ransacIterations: sample_size must be >= 1");
+  const double clean_sample = std::pow(1.0 - outlier_ratio, sample_size);
+  if (clean_sample >= 1.0) return 1;
+  const double q = std::ceil(std::log(1.0 - probability) / std::log(1.0 - clean_sample));
+  return static_cast<int>(std::clamp(q, 1.0, 1e9));
+}
+
+int FloorDetectorConfig::iterations() const {
+  return max_iterations > 0 ? max_iterations : ransacIterations(probability, outlier_ratio);
+}
+
+void FloorDetectorConfig::validate() const {
+  require(sigma > 0.0 && std::isfinite(sigma), "sigma", "must be > 0 [px]");
+  require(threshold_sigmas > 0.0 && std::isfinite(threshold_sigmas), "threshold_sigmas",
+          "must be > 0");
+  require(probability > 0.0 && probability < 1.0, "probability", "must be in (0, 1)");
+  require(outlier_ratio >= 0.0 && outlier_ratio < 1.0, "outlier_ratio", "must be in [0, 1)");
+  require(max_iterations >= 0, "max_iterations", "must be >= 0 (0: from eq. 3)");
+  require(min_points >= 3, "min_points", "must be >= 3 (a plane needs three points)");
+  require(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0, "min_inlier_ratio",
+          "must be in [0, 1]");
+}
+
+FloorDetector::FloorDetector(const FloorDetectorConfig& config) : config_(config) {
+  config_.validate();
+  iterations_ = config_.iterations();
+}
+
+FloorResult FloorDetector::detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud) const {
+  if (!cloud) return {};
+  SampleConsensusModelRDMapPlane model(cloud);
+  return detectWith(model, config_, iterations_);
+}
+
+FloorResult FloorDetector::detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
+                                  const pcl::Indices& indices) const {
+  if (!cloud) return {};
+  SampleConsensusModelRDMapPlane model(cloud, indices);
+  return detectWith(model, config_, iterations_);
+}
+
+}  // namespace multislit
