@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 namespace multislit {
 
@@ -153,7 +154,7 @@ void SampleConsensusModelRDMapPlane::setInputCloud(const PointCloudConstPtr& clo
   indices_ = std::make_shared<pcl::Indices>();
   if (input_) {
     indices_->resize(input_->size());
-    for (std::size_t i = 0; i < input_->size(); ++i) (*indices_)[i] = static_cast<pcl::index_t>(i);
+    std::iota(indices_->begin(), indices_->end(), 0);
   }
   cacheValidPoints();
 }
@@ -163,15 +164,22 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints() {
   u_.resize(indices_->size());
   v_.resize(indices_->size());
   dk_.resize(indices_->size());
+  // Plain pointers: the loop then keeps them in registers.
+  const PointRDM* points = size > 0 ? input_->points.data() : nullptr;
+  pcl::index_t* index = indices_->data();
+  float* u = u_.data();
+  float* v = v_.data();
+  float* dk = dk_.data();
   std::size_t kept = 0;
-  for (const auto i : *indices_) {
+  for (std::size_t k = 0, n = indices_->size(); k < n; ++k) {
+    const pcl::index_t i = index[k];
     if (i < 0 || static_cast<std::size_t>(i) >= size) continue;
-    const PointRDM& p = (*input_)[i];
+    const PointRDM& p = points[i];
     if (!isValidRDMPoint(p)) continue;
-    (*indices_)[kept] = i;
-    u_[kept] = p.u;
-    v_[kept] = p.v;
-    dk_[kept] = p.dk;
+    index[kept] = i;
+    u[kept] = p.u;
+    v[kept] = p.v;
+    dk[kept] = p.dk;
     ++kept;
   }
   indices_->resize(kept);
@@ -180,25 +188,15 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints() {
   u_.resize(kept);
   v_.resize(kept);
   dk_.resize(kept);
-  // Centre on the means (in double, then back to float).
-  double sum_u = 0.0, sum_v = 0.0, sum_dk = 0.0;
-  for (std::size_t k = 0; k < kept; ++k) {
-    sum_u += u_[k];
-    sum_v += v_[k];
-    sum_dk += dk_[k];
-  }
-  const double n = kept > 0 ? static_cast<double>(kept) : 1.0;
-  mean_u_ = sum_u / n;
-  mean_v_ = sum_v / n;
-  mean_dk_ = sum_dk / n;
-  const auto mu = static_cast<float>(mean_u_), mv = static_cast<float>(mean_v_),
-             md = static_cast<float>(mean_dk_);
-  for (std::size_t k = 0; k < kept; ++k) {
-    u_[k] -= mu;
-    v_[k] -= mv;
-    dk_[k] -= md;
-  }
-  // The means actually subtracted, so that centredC() matches the arrays exactly.
+  // Centre on the means: any centre near the points keeps the float sums of fitWithinDistance()
+  // accurate, so Eigen's vectorized float sums do.
+  const auto n = static_cast<Eigen::Index>(kept);
+  Eigen::Map<Eigen::ArrayXf> cu(u, n), cv(v, n), cdk(dk, n);
+  const float count = kept > 0 ? static_cast<float>(kept) : 1.0f;
+  const float mu = cu.sum() / count, mv = cv.sum() / count, md = cdk.sum() / count;
+  cu -= mu;
+  cv -= mv;
+  cdk -= md;
   mean_u_ = mu;
   mean_v_ = mv;
   mean_dk_ = md;

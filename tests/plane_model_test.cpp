@@ -127,6 +127,24 @@ TEST(PlaneModel, SamplesAreThreeValidPointsOfThreeDifferentSlits) {
 }
 
 TEST(PlaneModel, OnlyValidPointsAreIndicesAndInvalidOnesAreNeverInliers) {
+  PointRDM measured;
+  measured.u = 500.0f;
+  measured.v = 300.0f;
+  measured.dk = -2.5f;
+  EXPECT_TRUE(isValidRDMPoint(measured));
+  for (const float bad :
+       {kNaN, std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}) {
+    PointRDM q = measured;
+    q.u = bad;
+    EXPECT_FALSE(isValidRDMPoint(q));
+    q = measured;
+    q.v = bad;
+    EXPECT_FALSE(isValidRDMPoint(q));
+    q = measured;
+    q.dk = bad;
+    EXPECT_FALSE(isValidRDMPoint(q));
+  }
+
   const auto cloud = makeRDMap(3, 0.0, 0.1, false);
   std::size_t valid = 0;
   for (const auto& p : *cloud) valid += isValidRDMPoint(p);
