@@ -24,6 +24,11 @@ void ArgParser::flag(const std::string& name, const std::string& help) {
   specs_[name] = Spec{"", help, true};
 }
 
+void ArgParser::repeatable(const std::string& name, const std::string& help) {
+  order_.push_back(name);
+  specs_[name] = Spec{"", help, false, true};
+}
+
 void ArgParser::positionals(const std::string& name, const std::string& help,
                             std::size_t min_count) {
   positional_name_ = name;
@@ -61,6 +66,7 @@ bool ArgParser::parse(int argc, char** argv) {
       if (i + 1 >= argc) throw UsageError("--" + name + " needs a value");
       value = argv[++i];
     }
+    if (spec->second.is_list) lists_[name].push_back(value);
     values_[name] = value;
   }
   if (positional_values_.size() < positional_min_)
@@ -95,6 +101,11 @@ long ArgParser::integer(const std::string& name) const {
   if (text.empty() || *end != '\0' || errno != 0)
     throw UsageError("--" + name + " must be a whole number, not '" + text + "'");
   return v;
+}
+
+std::vector<std::string> ArgParser::list(const std::string& name) const {
+  const auto v = lists_.find(name);
+  return v == lists_.end() ? std::vector<std::string>{} : v->second;
 }
 
 bool ArgParser::has(const std::string& name) const {

@@ -21,6 +21,8 @@ class ArgParser {
 
   void option(const std::string& name, const std::string& default_value, const std::string& help);
   void flag(const std::string& name, const std::string& help);
+  /// An option that may be given several times; list() returns every value in order.
+  void repeatable(const std::string& name, const std::string& help);
   void positionals(const std::string& name, const std::string& help, std::size_t min_count = 0);
 
   /// False when --help was asked for (the help is printed to stdout). Throws UsageError.
@@ -30,6 +32,7 @@ class ArgParser {
   double number(const std::string& name) const;
   long integer(const std::string& name) const;
   bool has(const std::string& name) const;  ///< flag given, or option given a non-empty value
+  std::vector<std::string> list(const std::string& name) const;
   const std::vector<std::string>& rest() const { return positional_values_; }
   std::string help() const;
 
@@ -37,11 +40,13 @@ class ArgParser {
   struct Spec {
     std::string default_value, help;
     bool is_flag = false;
+    bool is_list = false;
   };
   std::string command_, summary_;
   std::vector<std::string> order_;
   std::map<std::string, Spec> specs_;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> lists_;
   std::string positional_name_, positional_help_;
   std::size_t positional_min_ = 0;
   std::vector<std::string> positional_values_;

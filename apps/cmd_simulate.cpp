@@ -1,6 +1,7 @@
 // multislit simulate: a reference image and a sequence of a named scenario, with ground truth.
 #include "cli.h"
 #include "commands.h"
+#include "common.h"
 
 #include "multislit/scenarios.h"
 #include "multislit/simulator.h"
@@ -20,10 +21,6 @@ std::string scenarioList() {
   std::string s;
   for (const std::string& n : scenarioNames()) s += (s.empty() ? "" : ", ") + n;
   return s;
-}
-
-void writeImage(const std::string& path, const cv::Mat& image) {
-  if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write image '" + path + "'");
 }
 
 }  // namespace
@@ -46,12 +43,14 @@ int runSimulate(int argc, char** argv) {
   args.option("roll", "", "override the pose's phi [deg]");
   args.option("height", "", "override the pose's h [m]");
   args.option("step", "", "override the robot's advance per frame [m]");
+  args.option("wall-depth", "", "scenario wall: the wall's distance along the optical axis [m]");
   args.option("out", "out/simulate", "output folder");
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("no-reference", "skip the reference image");
   if (!args.parse(argc, argv)) return 0;
 
-  Scenario scenario = makeScenario(args.str("scenario"));
+  Scenario scenario = args.has("wall-depth") ? makeWallScenario(args.number("wall-depth"))
+                                             : makeScenario(args.str("scenario"));
   if (args.has("scene")) scenario.scene = Scene::load(args.str("scene"));
   if (args.has("tilt")) scenario.mount.tilt = args.number("tilt");
   if (args.has("roll")) scenario.mount.roll = args.number("roll");

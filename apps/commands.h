@@ -4,5 +4,9 @@
 namespace multislit::apps {
 
 int runSimulate(int argc, char** argv);
+int runCalibrate(int argc, char** argv);
+int runRdmap(int argc, char** argv);
+int runDetect(int argc, char** argv);
+int runTable1(int argc, char** argv);
 
 }  // namespace multislit::apps

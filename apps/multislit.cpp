@@ -17,6 +17,14 @@ struct Command {
 const Command kCommands[] = {
     {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
      multislit::apps::runSimulate},
+    {"calibrate", "find the slits in a reference image and store regions and metric scale",
+     multislit::apps::runCalibrate},
+    {"rdmap", "measure the relative disparity map of images, written as PCD clouds",
+     multislit::apps::runRdmap},
+    {"detect", "find the floor and the obstacles in frames, one JSON line per frame",
+     multislit::apps::runDetect},
+    {"table1", "reproduce Table I and Fig. 12: floor residual std at the seven poses",
+     multislit::apps::runTable1},
 };
 
 void printUsage(std::ostream& out) {

@@ -1,0 +1,85 @@
+// multislit calibrate: reference image (+ planes at known depths) to a calibration file.
+#include "cli.h"
+#include "commands.h"
+#include "common.h"
+
+#include "multislit/reference.h"
+
+#include <cstdio>
+#include <iostream>
+
+namespace multislit::apps {
+
+int runCalibrate(int argc, char** argv) {
+  cli::ArgParser args(
+      "calibrate",
+      "Finds the slits in a reference image of a plane (Sec. II-C), assigns each reference\n"
+      "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
+      "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
+      "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
+      "axis) it is measured.");
+  args.option("reference", "", "reference image of a plane (required)");
+  args.option("sensor", "",
+              "sensor YAML: camera intrinsics and the reference pose (default: the paper's)");
+  args.repeatable("plane", "DEPTH:IMAGE, a wall at DEPTH metres");
+  args.option("region-width", "0", "assigned region width [px]; 0: the widest without overlap");
+  args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
+  args.option("min-contrast", "0.06", "slit peak above its background [share of full scale]");
+  args.option("slits", "15", "number of slits the projector casts");
+  args.option("camera-id", "", "name of the camera, checked when the calibration is used");
+  args.option("out", "calibration.yaml", "calibration file to write");
+  if (!args.parse(argc, argv)) return 0;
+  if (!args.has("reference")) throw cli::UsageError("--reference is required");
+
+  const SensorConfig sensor =
+      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  ReferenceConfig rc;
+  rc.region_width = static_cast<int>(args.integer("region-width"));
+  rc.estimator = parseEstimator(args.str("estimator"));
+  rc.min_contrast = args.number("min-contrast");
+  rc.expected_slits = static_cast<int>(args.integer("slits"));
+  const std::string ref_path = args.str("reference");
+  Reference ref;
+  try {
+    ref = Reference::fromImage(readMonoImage(ref_path), rc);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(ref_path + ": " + e.what());
+  }
+  ref.camera_id = args.str("camera-id");
+  ref.setNominalScale(sensor, sensor.mount);
+
+  const std::vector<std::string> planes = args.list("plane");
+  double fit_rms = 0;
+  if (!planes.empty()) {
+    std::vector<cv::Mat> images;
+    std::vector<double> depths;
+    for (const std::string& p : planes) {
+      const std::size_t colon = p.find(':');
+      if (colon == std::string::npos)
+        throw cli::UsageError("--plane takes DEPTH:IMAGE, not '" + p + "'");
+      char* end = nullptr;
+      const std::string depth = p.substr(0, colon);
+      depths.push_back(std::strtod(depth.c_str(), &end));
+      if (depth.empty() || *end != '\0' || !(depths.back() > 0))
+        throw cli::UsageError("--plane depth must be a positive number of metres, not '" + depth +
+                              "'");
+      images.push_back(readMonoImage(p.substr(colon + 1)));
+    }
+    fit_rms = ref.calibrateWithPlanes(images, depths, sensor.camera, rc);
+  }
+  ref.save(args.str("out"));
+
+  std::printf("reference %s: %zu slits, %zu points (%.0f per slit)\n", ref_path.c_str(),
+              ref.slits.size(), ref.pointCount(),
+              static_cast<double>(ref.pointCount()) / static_cast<double>(ref.slits.size()));
+  std::printf("  assigned region %d px (widest without overlap %d px), slit profile %.1f px wide\n",
+              ref.region_width, ref.max_region_width, ref.profile_width);
+  std::printf("  slit smoothing rms %.3f px\n", ref.smoothing_rms);
+  std::printf("  metric scale (%s): f * baseline = %.4f px m", ref.scale.source.c_str(),
+              ref.scale.disparity_constant);
+  if (!planes.empty()) std::printf(", fit rms %.3f px over %zu planes", fit_rms, planes.size());
+  std::printf("\nwrote %s\n", args.str("out").c_str());
+  return 0;
+}
+
+}  // namespace multislit::apps

@@ -1,0 +1,31 @@
+// Helpers shared by the multislit subcommands.
+#pragma once
+
+#include "cli.h"
+
+#include "multislit/reference.h"
+#include "multislit/slit_profile.h"
+
+#include <opencv2/core/mat.hpp>
+
+#include <string>
+
+namespace multislit::apps {
+
+/// An 8- or 16-bit one-channel image as stored (no conversion); throws std::runtime_error naming
+/// the file when it is missing, corrupt or of another kind.
+cv::Mat readMonoImage(const std::string& path);
+void writeImage(const std::string& path, const cv::Mat& image);
+/// "gaussian", "centroid" or "windowed"; throws cli::UsageError otherwise.
+Estimator parseEstimator(const std::string& name);
+
+/// Declares --calibration, --reference and --sensor, the ways a command gets its reference.
+void addReferenceOptions(cli::ArgParser& args);
+/// The calibration file when given, else the slits of the reference image with the sensor
+/// model's scale (the reference pose is the mount of --sensor).
+Reference referenceFromArgs(const cli::ArgParser& args);
+
+/// A string as a JSON string literal, quotes included.
+std::string jsonString(const std::string& s);
+
+}  // namespace multislit::apps
