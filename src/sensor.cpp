@@ -2,6 +2,7 @@
 
 #include "yaml_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -109,6 +110,12 @@ SensorGeometry::SensorGeometry(const SensorConfig& config) : config_(config) {
       Eigen::AngleAxisd(config_.projector.rotation * kDeg, Eigen::Vector3d::UnitZ())
           .toRotationMatrix();
   projector_centre_ = Eigen::Vector3d(config_.projector.baseline, 0.0, 0.0);
+  const ProjectorConfig& p = config_.projector;
+  for (int i = 0; i < p.slit_count; ++i) {
+    slit_tan_.push_back(slitTan(i));
+    if (i + 1 < p.slit_count)
+      boundary_tan_.push_back(std::tan((i + 1 - 0.5 * p.slit_count) * p.slit_spacing * kDeg));
+  }
 }
 
 double SensorGeometry::slitTan(int slit) const {
@@ -148,12 +155,17 @@ int SensorGeometry::nearestSlit(const Eigen::Vector2d& xy) const {
 }
 
 double SensorGeometry::nearestSheetOffset(const Eigen::Vector2d& xy, int* slit) const {
-  const ProjectorConfig& p = config_.projector;
-  const double spacing = p.slit_spacing * kDeg, middle = 0.5 * (p.slit_count - 1);
-  const double alpha = std::atan(xy.x() - p.curvature * xy.y() * xy.y());
-  const double i = std::clamp(std::nearbyint(alpha / spacing + middle), 0.0, p.slit_count - 1.0);
+  // The nearest sheet by its tangent (no atan): the boundaries between sheets are monotonic.
+  const double x = xy.x() - config_.projector.curvature * xy.y() * xy.y();
+  const auto i =
+      std::upper_bound(boundary_tan_.begin(), boundary_tan_.end(), x) - boundary_tan_.begin();
   *slit = static_cast<int>(i);
-  return alpha - (i - middle) * spacing;
+  // atan(x) - alpha_i = atan(d) with d = (x - tan alpha_i) / (1 + x tan alpha_i); |d| is a few
+  // hundredths at most, where d - d^3/3 + d^5/5 is exact to 1e-11.
+  const double t = slit_tan_[static_cast<std::size_t>(i)];
+  const double d = (x - t) / (1.0 + x * t), d2 = d * d;
+  if (d2 > 1e-3) return std::atan(d);
+  return d * (1.0 - d2 * (1.0 / 3.0 - d2 / 5.0));
 }
 
 double SensorGeometry::rowOf(int slit, double t) const {

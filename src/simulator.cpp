@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 
 namespace multislit {
@@ -46,6 +47,23 @@ class RowRandom {
 
 enum Stream : uint64_t { kSpeckle = 1, kSensorNoise = 2 };
 
+// Mean of exp(-x^2 / 2 sigma^2) over a pixel on which x = d0 + a p + b q, p and q uniform in
+// [-1/2, 1/2]: a Gaussian sheet profile integrated exactly over a pixel where the sheet offset
+// is linear. With F(z) = z erf(z) + exp(-z^2) / sqrt(pi), the antiderivative of erf.
+double pixelMeanOfGaussian(double d0, double a, double b, double sigma) {
+  a = std::abs(a);
+  b = std::abs(b);
+  if (a < b) std::swap(a, b);
+  const double k = 1.0 / (sigma * std::sqrt(2.0));
+  if (a < 0.02 * sigma) return std::exp(-0.5 * d0 * d0 / (sigma * sigma));
+  const double scale = sigma * std::sqrt(M_PI / 2.0) / a;
+  if (b < 0.02 * sigma) return scale * (std::erf(k * (d0 + a / 2)) - std::erf(k * (d0 - a / 2)));
+  auto F = [](double z) { return z * std::erf(z) + std::exp(-z * z) / std::sqrt(M_PI); };
+  return scale / (b * k) *
+         (F(k * (d0 + a / 2 + b / 2)) - F(k * (d0 - a / 2 + b / 2)) - F(k * (d0 + a / 2 - b / 2)) +
+          F(k * (d0 - a / 2 - b / 2)));
+}
+
 // Everything needed to shade one ray, in world coordinates.
 struct Shader {
   const Scene& scene;
@@ -54,52 +72,46 @@ struct Shader {
   Eigen::Isometry3d world_from_camera;
   Eigen::Vector3d camera_centre, projector_centre;
 
-  // Laser light reaching the camera along the ray through (u, v) [FS]. The floor's albedo is
-  // taken from the pixel centre (`pixel_object`, `pixel_albedo`): its grain is many pixels wide.
-  double laser(double u, double v, int pixel_object, double pixel_albedo) const {
+  // What one ray sees: the surface, its albedo and ambient light and, near a sheet, the laser's
+  // radiance before the sheet profile (0 when shadowed, facing away or beyond the slit's end).
+  struct Sample {
+    int object = -1;
+    int slit = 0;
+    double offset = std::numeric_limits<double>::infinity();  // from the nearest sheet [rad]
+    double t = 0;         // position along the slit (projector y / z)
+    double albedo = 0;    // at 660 nm
+    double radiance = 0;  // laser at the sheet's centre [FS]
+  };
+
+  // `known_object` and `known_albedo` pass the pixel centre's albedo to its sub-samples: the
+  // floor's grain is many pixels wide.
+  Sample trace(double u, double v, double reach, int known_object = -2,
+               double known_albedo = 0) const {
+    Sample s;
     const Eigen::Vector3d ray_c = geometry.pixelRay(u, v).normalized();
     const Eigen::Vector3d ray_w = world_from_camera.linear() * ray_c;
     const Hit hit = scene.intersect(camera_centre, ray_w);
-    if (!hit.valid()) return 0.0;
-    const Eigen::Vector3d point_c = hit.distance * ray_c;
-    const Eigen::Vector2d xy = geometry.toProjector(point_c);
-    if (std::abs(xy.y()) > geometry.slitTMax()) return 0.0;
-    int slit = 0;
-    const double offset = geometry.nearestSheetOffset(xy, &slit);
-    const double sigma = geometry.config().projector.sheet_sigma;
-    const double profile = std::exp(-0.5 * offset * offset / (sigma * sigma));
-    if (profile < 1e-7) return 0.0;
+    s.object = hit.object;
+    if (!hit.valid()) return s;
+    const Eigen::Vector2d xy = geometry.toProjector(hit.distance * ray_c);
+    s.offset = geometry.nearestSheetOffset(xy, &s.slit);
+    s.t = xy.y();
     const Eigen::Vector3d point_w = camera_centre + hit.distance * ray_w;
+    s.albedo = hit.object == known_object ? known_albedo : scene.albedo(hit.object, point_w);
+    if (std::abs(s.offset) > reach || std::abs(s.t) > geometry.slitTMax()) return s;
     const Eigen::Vector3d to_point = point_w - projector_centre;
     const double range = to_point.norm();
     const Eigen::Vector3d dir = to_point / range;
     const double incidence = -hit.normal.dot(dir);
-    if (incidence <= 0) return 0.0;
-    if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return 0.0;  // shadow
-    const double falloff = (0.5 / range) * (0.5 / range);
-    const double albedo =
-        hit.object == pixel_object ? pixel_albedo : scene.albedo(hit.object, point_w);
-    return render.laser_peak * albedo * incidence * falloff * profile;
+    if (incidence <= 0) return s;
+    if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return s;  // shadow
+    s.radiance = render.laser_peak * s.albedo * incidence * (0.5 / range) * (0.5 / range);
+    return s;
   }
 
-  // Ambient light, and whether the laser is near this pixel (so it must be supersampled).
-  double ambient(double u, double v, bool* near_slit, int* object, double* albedo) const {
-    const Eigen::Vector3d ray_c = geometry.pixelRay(u, v).normalized();
-    const Eigen::Vector3d ray_w = world_from_camera.linear() * ray_c;
-    const Hit hit = scene.intersect(camera_centre, ray_w);
-    *near_slit = false;
-    *object = hit.object;
-    *albedo = 0.0;
-    if (!hit.valid()) return 0.0;
-    const Eigen::Vector2d xy = geometry.toProjector(hit.distance * ray_c);
-    int slit = 0;
-    const double offset = geometry.nearestSheetOffset(xy, &slit);
-    // Beyond 4.5 sigma the sheet adds < 4e-5 of its peak; the pixel's own extent is ~1/f.
-    const double pixel = 2.0 / geometry.config().camera.f();
-    const double reach = 4.5 * geometry.config().projector.sheet_sigma + pixel;
-    *near_slit = std::abs(offset) < reach && std::abs(xy.y()) < geometry.slitTMax() + pixel;
-    *albedo = scene.albedo(hit.object, camera_centre + hit.distance * ray_w);
-    return render.ambient * *albedo;
+  double laser(const Sample& s) const {
+    const double sigma = geometry.config().projector.sheet_sigma;
+    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (sigma * sigma));
   }
 };
 
@@ -135,50 +147,74 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
                       world_from_camera.translation(),
                       world_from_camera * geometry_.projectorCentre()};
 
-  // 1. Ambient light at every pixel centre, and where the laser sheets may be.
-  cv::Mat ambient(height, width, CV_64F), near(height, width, CV_8U);
-  cv::Mat object(height, width, CV_32S), albedo(height, width, CV_64F);
+  // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
+  const double sigma = geometry_.config().projector.sheet_sigma,
+               pixel = 1.0 / geometry_.config().camera.f();
+  const double reach = 4.5 * sigma + 2 * pixel;  // beyond 4.5 sigma a sheet adds < 4e-5 of its peak
+  std::vector<Shader::Sample> centre(static_cast<std::size_t>(width) * height);
+  cv::Mat ambient(height, width, CV_32F), near(height, width, CV_8U);
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
-      double* a = ambient.ptr<double>(r);
-      uchar* n = near.ptr<uchar>(r);
       for (int c = 0; c < width; ++c) {
-        bool is_near = false;
-        a[c] = shader.ambient(c, r, &is_near, &object.ptr<int>(r)[c], &albedo.ptr<double>(r)[c]);
-        n[c] = is_near ? 255 : 0;
+        const Shader::Sample& s = centre[static_cast<std::size_t>(r) * width + c] =
+            shader.trace(c, r, reach);
+        ambient.ptr<float>(r)[c] = static_cast<float>(render_.ambient * s.albedo);
+        near.ptr<uchar>(r)[c] =
+            std::abs(s.offset) < reach && std::abs(s.t) < geometry_.slitTMax() + 2 * pixel;
       }
     }
   });
   cv::dilate(near, near, cv::Mat::ones(3, 3, CV_8U));  // catch pixels split by an edge
 
-  // 2. Laser light, integrated over each pixel's area near the sheets (sub-pixel positions).
+  // 2. Laser light integrated over each pixel near a sheet: exactly where the sheet's offset is
+  // linear over the pixel (same surface and slit, lit, not at the slit's end), else sampled
+  // at n x n sub-pixel positions (edges, shadows, slit ends).
   const int n = render_.supersample;
-  cv::Mat laser(height, width, CV_64F, cv::Scalar(0));
+  const double t_inner = geometry_.slitTMax() - 3 * pixel;
+  cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
+  auto at = [&](int r, int c) -> const Shader::Sample& {
+    return centre[static_cast<std::size_t>(r) * width + c];
+  };
+  auto linear = [&](int r, int c) {
+    if (r < 1 || c < 1 || r >= height - 1 || c >= width - 1) return false;
+    const Shader::Sample& m = at(r, c);
+    for (const Shader::Sample* q : {&at(r, c - 1), &at(r, c + 1), &at(r - 1, c), &at(r + 1, c), &m})
+      if (q->object != m.object || q->slit != m.slit || !(q->radiance > 0) ||
+          std::abs(q->t) > t_inner)
+        return false;
+    return std::abs(at(r, c - 1).offset + at(r, c + 1).offset - 2 * m.offset) < 0.02 * sigma &&
+           std::abs(at(r - 1, c).offset + at(r + 1, c).offset - 2 * m.offset) < 0.02 * sigma;
+  };
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
-      const uchar* m = near.ptr<uchar>(r);
-      const int* id = object.ptr<int>(r);
-      const double* rho = albedo.ptr<double>(r);
-      double* l = laser.ptr<double>(r);
       for (int c = 0; c < width; ++c) {
-        if (!m[c]) continue;
-        double sum = 0.0;
-        for (int j = 0; j < n; ++j)
-          for (int i = 0; i < n; ++i)
-            sum += shader.laser(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n, id[c], rho[c]);
-        l[c] = sum / (n * n);
+        if (!near.ptr<uchar>(r)[c]) continue;
+        const Shader::Sample& m = at(r, c);
+        double value = 0;
+        if (linear(r, c)) {
+          const double gu = 0.5 * (at(r, c + 1).offset - at(r, c - 1).offset);
+          const double gv = 0.5 * (at(r + 1, c).offset - at(r - 1, c).offset);
+          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma);
+        } else {
+          for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+              value += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n,
+                                                 reach, m.object, m.albedo));
+          value /= n * n;
+        }
+        laser.ptr<float>(r)[c] = static_cast<float>(value);
       }
     }
   });
 
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
   if (render_.noise && render_.speckle_contrast > 0) {
-    cv::Mat speckle(height, width, CV_64F);
+    cv::Mat speckle(height, width, CV_32F);
     cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
       for (int r = rows.start; r < rows.end; ++r) {
         RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSpeckle);
-        double* s = speckle.ptr<double>(r);
-        for (int c = 0; c < width; ++c) s[c] = rng.normal();
+        float* s = speckle.ptr<float>(r);
+        for (int c = 0; c < width; ++c) s[c] = static_cast<float>(rng.normal());
       }
     });
     const double g = render_.speckle_grain;
@@ -199,13 +235,13 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSensorNoise);
-      const double* e = irradiance.ptr<double>(r);
+      const float* e = irradiance.ptr<float>(r);
       for (int c = 0; c < width; ++c) {
         double value = e[c];
         if (render_.noise) {
-          const double sigma = std::sqrt(std::max(value, 0.0) / render_.full_well +
+          const double noise = std::sqrt(std::max(value, 0.0) / render_.full_well +
                                          render_.read_noise * render_.read_noise);
-          value += sigma * rng.normal();
+          value += noise * rng.normal();
         }
         const double dn = std::round(std::clamp(value, 0.0, 1.0) * full);
         if (render_.bit_depth == 8)

@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace multislit {
 
@@ -102,6 +103,8 @@ class SensorGeometry {
   SensorConfig config_;
   double f_, cx_, cy_, t_max_;
   Eigen::Matrix3d camera_from_projector_;  // rotation about z by the pattern rotation
+  std::vector<double> slit_tan_;           // tan(alpha_i)
+  std::vector<double> boundary_tan_;       // tan of the angles midway between adjacent slits
   Eigen::Vector3d projector_centre_;
 };
 
