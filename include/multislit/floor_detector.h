@@ -30,9 +30,8 @@ struct FloorDetectorConfig {
   double outlier_ratio = 0.5;     ///< eps of eq. (3): assumed share of non-floor points [-]
   int max_iterations = 0;         ///< RANSAC iterations q; 0: from eq. (3) (35 by default) [-]
   int min_points = 50;            ///< fewer valid points: the floor is not found [-]
-  double min_inlier_ratio =
-      0.3;                 ///< fewer floor points than this share of the valid: not found [-]
-  unsigned seed = 12345u;  ///< seed of the sample draws; a seed and a cloud give one result
+  double min_inlier_ratio = 0.3;  ///< fewer floor points than this share of valid: not found [-]
+  unsigned seed = 12345u;         ///< seed of the sample draws; a seed and a cloud give one result
   /// Refit each new best RANSAC plane on its inliers (eq. 2) and score the refit (LO-RANSAC);
   /// false: the paper's plain RANSAC, which picks a wrong plane more often when obstacles are
   /// large.
