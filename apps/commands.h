@@ -8,5 +8,6 @@ int runCalibrate(int argc, char** argv);
 int runRdmap(int argc, char** argv);
 int runDetect(int argc, char** argv);
 int runTable1(int argc, char** argv);
+int runBench(int argc, char** argv);
 
 }  // namespace multislit::apps

@@ -1,0 +1,161 @@
+// The hot kernels of the pipeline (issue 7), on simulated frames of the paper's sensor: the slit
+// search and sub-pixel measure on a real image row, the extraction of a whole frame, and the
+// floor fit of a real RDMap. Run with `cmake --build <build> --target bench`; not a test.
+#include "multislit/extractor.h"
+#include "multislit/floor_detector.h"
+#include "multislit/plane_model.h"
+#include "multislit/scenarios.h"
+#include "multislit/simulator.h"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace multislit;
+
+namespace {
+
+/// A reference and a frame of the cable scenario with the cable in view, rendered once.
+struct Data {
+  Reference reference;
+  cv::Mat image;                             ///< 8-bit, 1296 x 964
+  pcl::PointCloud<PointRDM>::Ptr cloud;      ///< its RDMap
+  int row = 0;                               ///< the image row crossed by the most slits
+  std::vector<std::pair<int, int>> regions;  ///< [first, last] of each point on that row [px]
+};
+
+const Data& data() {
+  static const Data d = [] {
+    Data out;
+    const Simulator sim{SensorConfig{}};
+    const Scenario ref = makeScenario("reference");
+    out.reference = Reference::fromImage(
+        sim.render(ref.scene, sim.geometry().robotFromCamera(ref.reference_mount), 1000).image);
+    out.reference.setNominalScale(sim.geometry().config(), ref.reference_mount);
+    Scenario cable = makeScenario("cable");
+    cable.step = 0.008;
+    const std::uint64_t frame = 20;  // the cable lies across the middle slits
+    out.image =
+        sim.render(cable.scene,
+                   cable.worldFromRobot(frame) * sim.geometry().robotFromCamera(cable.mount), frame)
+            .image;
+    out.cloud = Extractor(out.reference).extract(out.image, 0, 0);
+    // The row with the most reference points, and their assigned regions (Fig. 7).
+    std::vector<std::vector<std::pair<int, int>>> by_row(static_cast<std::size_t>(out.image.rows));
+    const double half = 0.5 * out.reference.region_width;
+    for (const ReferenceSlit& slit : out.reference.slits)
+      for (std::size_t k = 0; k < slit.u.size(); ++k)
+        if (std::isfinite(slit.u[k]))
+          by_row[static_cast<std::size_t>(slit.first_row) + k].emplace_back(
+              static_cast<int>(std::ceil(slit.u[k] - half)),
+              static_cast<int>(std::floor(slit.u[k] + half)));
+    for (std::size_t r = 0; r < by_row.size(); ++r)
+      if (by_row[r].size() > out.regions.size()) {
+        out.regions = by_row[r];
+        out.row = static_cast<int>(r);
+      }
+    return out;
+  }();
+  return d;
+}
+
+ProfileParams paramsOf(const Reference& ref) {  // as Extractor::extract sets them for 8 bits
+  const ExtractorConfig c;
+  ProfileParams p;
+  p.estimator = c.estimator;
+  p.min_contrast = c.min_contrast * 255.0;
+  p.saturation = 255.0;
+  p.max_saturated = c.max_saturated;
+  p.min_width = c.min_width_factor * ref.profile_width;
+  p.max_width = c.max_width_factor * ref.profile_width;
+  p.half_window = std::max(3, static_cast<int>(std::lround(1.25 * ref.profile_width)));
+  p.window_sigma = ref.profile_width / 2.3548;
+  return p;
+}
+
+// Search each assigned region of one row for its slit and measure it (the per-point kernel).
+void BM_MeasurePeakRow(benchmark::State& state, Estimator estimator) {
+  const Data& d = data();
+  ProfileParams p = paramsOf(d.reference);
+  p.estimator = estimator;
+  const auto* row = d.image.ptr<std::uint8_t>(d.row);
+  for (auto _ : state) {
+    for (const auto& [first, last] : d.regions) {
+      Peak peak;
+      benchmark::DoNotOptimize(measurePeak(row, d.image.cols, first, last, p, &peak));
+      benchmark::DoNotOptimize(peak);
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(d.regions.size()));
+}
+BENCHMARK_CAPTURE(BM_MeasurePeakRow, gaussian, Estimator::Gaussian);
+BENCHMARK_CAPTURE(BM_MeasurePeakRow, centroid, Estimator::Centroid);
+BENCHMARK_CAPTURE(BM_MeasurePeakRow, windowed, Estimator::Windowed);
+
+// The sub-pixel measure alone, at the maxima the search found.
+void BM_MeasurePeakAtRow(benchmark::State& state) {
+  const Data& d = data();
+  const ProfileParams p = paramsOf(d.reference);
+  const auto* row = d.image.ptr<std::uint8_t>(d.row);
+  std::vector<int> tops;
+  for (const auto& [first, last] : d.regions) {
+    int top = first;
+    for (int x = first; x <= last; ++x)
+      if (row[x] > row[top]) top = x;
+    tops.push_back(top);
+  }
+  for (auto _ : state) {
+    for (const int top : tops) {
+      Peak peak;
+      benchmark::DoNotOptimize(measurePeakAt(row, d.image.cols, top, p, &peak));
+      benchmark::DoNotOptimize(peak);
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(tops.size()));
+}
+BENCHMARK(BM_MeasurePeakAtRow);
+
+// Image to RDMap: one full 1296 x 964 frame (about 4500 points).
+void BM_ExtractFrame(benchmark::State& state) {
+  const Data& d = data();
+  const Extractor extractor(d.reference);
+  pcl::PointCloud<PointRDM> cloud;
+  std::size_t points = 0;
+  for (auto _ : state) {
+    points = extractor.extract(d.image, cloud).reference_points;
+    benchmark::DoNotOptimize(cloud.points.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(points));
+}
+BENCHMARK(BM_ExtractFrame)->Unit(benchmark::kMicrosecond);
+
+// RANSAC (eq. 3), the eq. (2) refit and the classification of every point of a real RDMap.
+void BM_FloorDetect(benchmark::State& state) {
+  const Data& d = data();
+  const FloorDetector detector;
+  for (auto _ : state) benchmark::DoNotOptimize(detector.detect(d.cloud));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(d.cloud->size()));
+}
+BENCHMARK(BM_FloorDetect)->Unit(benchmark::kMicrosecond);
+
+// eq. (2) alone: the least-squares plane through every point of the RDMap.
+void BM_PlaneFit(benchmark::State& state) {
+  const Data& d = data();
+  pcl::Indices all(d.cloud->size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  for (auto _ : state) benchmark::DoNotOptimize(fitRDMapPlane(*d.cloud, all));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(all.size()));
+}
+BENCHMARK(BM_PlaneFit)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  data();  // render before timing anything
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
