@@ -17,6 +17,8 @@ struct Command {
 const Command kCommands[] = {
     {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
      multislit::apps::runSimulate},
+    {"emulate", "serve the simulator's images of a walk as a GigE Vision camera on 127.0.0.1",
+     multislit::apps::runEmulate},
     {"calibrate", "find the slits in a reference image and store regions and metric scale",
      multislit::apps::runCalibrate},
     {"rdmap", "measure the relative disparity map of images, written as PCD clouds",

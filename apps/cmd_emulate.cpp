@@ -1,0 +1,115 @@
+// multislit emulate: a GigE Vision camera on 127.0.0.1 serving the simulator's images of a walk.
+#include "cli.h"
+#include "commands.h"
+
+#include "multislit/scenarios.h"
+#include "multislit/simulator.h"
+#include "multislit/sources.h"
+
+#include <chrono>
+#include <csignal>
+#include <iostream>
+#include <thread>
+
+namespace multislit::apps {
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+void onSignal(int) { g_interrupted = 1; }
+
+}  // namespace
+
+int runEmulate(int argc, char** argv) {
+  cli::ArgParser args(
+      "emulate",
+      "Serves the simulator's images of a walk as a GigE Vision camera on 127.0.0.1 (Aravis's\n"
+      "fake camera, GVCP port 3956) until interrupted (Ctrl-C) or for --seconds. The walk's\n"
+      "frames are rendered first, then served in turn. Open the camera by its address, e.g.\n"
+      "multislit_grabber_example --camera 127.0.0.1 --calibration FILE. A client's\n"
+      "AcquisitionFrameRate replaces --fps.");
+  args.option("scenario", "ball", "named scenario whose walk is filmed");
+  args.option("frames", "16", "walk frames rendered beforehand and served in turn");
+  args.option("fps", "30", "frame rate until a client sets its own [Hz]");
+  args.option("seconds", "0", "serve this long [s]; 0: until interrupted");
+  args.option("serial", "MULTISLIT", "device serial number");
+  args.option("loss", "0", "fraction of stream packets not sent, to test lossy links");
+  args.option("bit-depth", "8", "8 (Mono8) or 16 (Mono16)");
+  args.option("seed", "1", "noise seed");
+  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.flag("no-noise", "render without speckle, shot and read noise");
+  if (!args.parse(argc, argv)) return 0;
+
+  const long frames = args.integer("frames");
+  const double seconds = args.number("seconds");
+  if (frames < 1) throw cli::UsageError("--frames must be >= 1");
+  if (!(seconds >= 0)) throw cli::UsageError("--seconds must be >= 0");
+  EmulatorConfig config;
+  config.serial = args.str("serial");
+  config.fps = args.number("fps");
+  config.lost_packet_ratio = args.number("loss");
+  try {
+    config.validate();
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(e.what());
+  }
+
+  // The walk, rendered once (rendering is far slower than serving).
+  const Scenario scenario = makeScenario(args.str("scenario"));
+  RenderConfig render;
+  render.seed = static_cast<uint64_t>(args.integer("seed"));
+  render.bit_depth = static_cast<int>(args.integer("bit-depth"));
+  render.noise = !args.has("no-noise");
+  const Simulator sim(args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{},
+                      render);
+  std::vector<cv::Mat> images;
+  cli::Progress progress(static_cast<std::size_t>(frames), "render");
+  for (long k = 0; k < frames; ++k) {
+    const auto frame = static_cast<uint64_t>(k);
+    const Eigen::Isometry3d world_from_camera =
+        scenario.worldFromRobot(frame) * sim.geometry().robotFromCamera(scenario.mount);
+    images.push_back(sim.render(scenario.scene, world_from_camera, frame).image);
+    progress.update(static_cast<std::size_t>(k + 1));
+  }
+  progress.finish();
+
+  CameraEmulator camera(images, config);
+  g_interrupted = 0;
+  auto previous_int = std::signal(SIGINT, onSignal);
+  auto previous_term = std::signal(SIGTERM, onSignal);
+  std::cout << "GigE Vision camera " << CameraEmulator::kAddress << " (serial " << config.serial
+            << "): " << images.front().cols << "x" << images.front().rows << " Mono"
+            << render.bit_depth << ", " << frames << " frames of scenario " << scenario.name
+            << " in turn at " << config.fps << " Hz; ";
+  if (seconds > 0)
+    std::cout << "for " << seconds << " s\n" << std::flush;
+  else
+    std::cout << "Ctrl-C stops\n" << std::flush;
+
+  const auto start = std::chrono::steady_clock::now();
+  auto report = start;
+  std::uint64_t reported = 0;
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto now = std::chrono::steady_clock::now();
+    if (g_interrupted || (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)))
+      break;
+    if (now - report >= std::chrono::seconds(5)) {
+      const std::uint64_t served = camera.framesServed();
+      std::cout << "served " << served << " frames ("
+                << static_cast<double>(served - reported) /
+                       std::chrono::duration<double>(now - report).count()
+                << " fps)\n"
+                << std::flush;
+      report = now;
+      reported = served;
+    }
+  }
+  std::signal(SIGINT, previous_int);
+  std::signal(SIGTERM, previous_term);
+  std::cout << "served " << camera.framesServed() << " frames in "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+            << " s\n";
+  return 0;
+}
+
+}  // namespace multislit::apps

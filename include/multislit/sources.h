@@ -1,0 +1,261 @@
+// Where frames come from: a camera (Aravis: GigE Vision, USB3 Vision), recorded PNG images, or
+// the simulator. MultiSlitGrabber reads any FrameSource on its acquisition thread.
+#pragma once
+
+#include "multislit/frame.h"
+#include "multislit/reference.h"
+#include "multislit/scenarios.h"
+#include "multislit/sensor.h"
+#include "multislit/simulator.h"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace multislit {
+
+/// Counts kept by a source; errors of one frame are counted here, never thrown.
+struct SourceStats {
+  std::uint64_t frames = 0;       ///< frames delivered by next()
+  std::uint64_t bad_buffers = 0;  ///< camera buffers with an error status (lost packets), skipped
+  std::uint64_t read_errors = 0;  ///< failed reads: unreadable files, failed camera (re)opens
+  std::uint64_t reconnects = 0;   ///< times a lost camera was opened again
+};
+
+/// A stream of frames. start(), next() and stop() are called from one thread at a time;
+/// interrupt(), trigger(), stats() and the queries from any thread.
+class FrameSource {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  FrameSource() = default;
+  FrameSource(const FrameSource&) = delete;
+  FrameSource& operator=(const FrameSource&) = delete;
+  virtual ~FrameSource() = default;
+
+  /// Opens the device or the files; throws std::runtime_error when that fails.
+  virtual void start() = 0;
+  /// The next frame, waiting at most about `timeout`; nullopt when none came in time, after
+  /// interrupt(), or when finished().
+  virtual std::optional<Frame> next(std::chrono::milliseconds timeout) = 0;
+  /// Releases the device. Never throws.
+  virtual void stop() = 0;
+  virtual std::string name() const = 0;
+  virtual SourceStats stats() const = 0;
+  /// True when frames come on the source's own clock (a camera, a paced replay): a consumer that
+  /// is too slow loses frames. False when the next frame waits until it is asked for.
+  virtual bool live() const = 0;
+  /// True when no more frames will come (the end of a sequence played once).
+  virtual bool finished() const { return false; }
+
+  /// Makes a waiting and every later next() return at once, until the next start().
+  void interrupt();
+  /// Asks for one frame in triggered mode (software trigger, stepping through files).
+  void trigger();
+
+ protected:
+  /// Clears interrupt() and pending triggers; sources call it first in start().
+  void resetWaits();
+  bool interrupted() const;
+  /// Sleeps until `deadline`; false when interrupted.
+  bool sleepUntil(Clock::time_point deadline);
+  /// Takes one pending trigger, waiting for it until `deadline`; false when none came.
+  bool takeTrigger(Clock::time_point deadline);
+
+ private:
+  mutable std::mutex wait_mutex_;
+  std::condition_variable wait_cv_;
+  bool interrupted_ = false;
+  std::uint64_t triggers_ = 0;
+};
+
+// --- cameras ---------------------------------------------------------------------------------
+
+enum class PixelFormat { Mono8, Mono16 };
+enum class TriggerMode { FreeRunning, Software };
+
+struct AravisConfig {
+  /// GigE Vision camera: its IPv4 address ("127.0.0.1" for `multislit emulate`). USB3 Vision:
+  /// "usb3:VENDOR:MODEL:SERIAL". Cameras are opened directly, never by network discovery.
+  std::string camera = "127.0.0.1";
+  double exposure_us = 0.0;  ///< exposure time [us]; 0: keep the camera's
+  double gain_db = -1.0;     ///< analog gain [dB]; negative: keep the camera's
+  double frame_rate = 30.0;  ///< acquisition rate in free-running mode [Hz]; 0: keep the camera's
+  PixelFormat pixel_format = PixelFormat::Mono8;
+  int roi_x = 0;       ///< region of interest: left column [px]
+  int roi_y = 0;       ///< region of interest: top row [px]
+  int roi_width = 0;   ///< region of interest width [px]; 0: keep the camera's region
+  int roi_height = 0;  ///< region of interest height [px]; 0: keep the camera's region
+  TriggerMode trigger = TriggerMode::FreeRunning;
+  int buffer_count = 8;                       ///< stream buffers [-]
+  int socket_buffer_bytes = 4 * 1024 * 1024;  ///< GigE stream socket receive buffer [B]
+  int packet_size = 0;                        ///< GigE stream packet size [B]; 0: keep the camera's
+  int lost_after_ms = 2000;           ///< no frame for this long while one is due: camera lost [ms]
+  int reconnect_delay_ms = 100;       ///< first wait before reopening a lost camera [ms]
+  int reconnect_max_delay_ms = 2000;  ///< the wait doubles after each failure up to this [ms]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// A GigE Vision or USB3 Vision camera through Aravis. A camera that disappears is reopened with
+/// back-off (stats().reconnects); buffers with an error status are counted and skipped. Frame
+/// seq is the camera's frame id (16-bit ids of GigE Vision 1.x unwrapped), stamp_us the host's
+/// clock when the buffer arrived.
+class AravisSource : public FrameSource {
+ public:
+  explicit AravisSource(const AravisConfig& config = {});
+  ~AravisSource() override;
+
+  void start() override;
+  std::optional<Frame> next(std::chrono::milliseconds timeout) override;
+  void stop() override;
+  std::string name() const override;
+  SourceStats stats() const override;
+  bool live() const override { return config_.trigger == TriggerMode::FreeRunning; }
+  const AravisConfig& config() const { return config_; }
+
+ private:
+  struct Camera;  // the opened Aravis objects
+  void open();
+  void release(bool camera_lost);
+  std::optional<Frame> take(Clock::time_point deadline);
+  std::uint64_t unwrap(std::uint64_t frame_id);
+
+  AravisConfig config_;
+  std::unique_ptr<Camera> camera_;
+  Clock::time_point last_frame_{}, reconnect_at_{};
+  int reconnect_delay_ms_ = 0;
+  bool trigger_outstanding_ = false;
+  std::uint64_t last_id_ = 0, id_wraps_ = 0;  // 16-bit GigE Vision frame ids made monotonic
+  std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0};
+};
+
+/// Aravis's GigE Vision fake camera on 127.0.0.1 (GVCP port 3956) serving images in turn: the
+/// frame with camera frame id k carries image imageIndex(k). For tests, demos and
+/// `multislit emulate`; it answers on the loopback interface only.
+struct EmulatorConfig {
+  std::string serial = "MULTISLIT";  ///< device serial number (at most 15 characters)
+  double fps = 30.0;                 ///< frame rate until a client sets its own [Hz]
+  double lost_packet_ratio = 0.0;    ///< fraction of stream packets not sent [-]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+class CameraEmulator {
+ public:
+  static constexpr const char* kAddress = "127.0.0.1";
+
+  /// `images`: one or more images of the same size and type (CV_8UC1 or CV_16UC1). Throws
+  /// std::invalid_argument for bad images, std::runtime_error when 127.0.0.1:3956 is taken.
+  explicit CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig& config = {});
+  ~CameraEmulator();
+  CameraEmulator(const CameraEmulator&) = delete;
+  CameraEmulator& operator=(const CameraEmulator&) = delete;
+
+  std::size_t imageIndex(std::uint64_t frame_id) const;
+  std::uint64_t framesServed() const;
+  /// 1 makes a camera that answers control requests but sends no image.
+  void setLostPacketRatio(double ratio);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// --- recorded images -------------------------------------------------------------------------
+
+struct ImageSequenceConfig {
+  /// Folder of PNG images: the files of its frames.csv (from `multislit simulate`) when present,
+  /// else every *.png but reference.png, in name order.
+  std::string folder;
+  std::vector<std::string> files;  ///< or these files in this order (used when not empty)
+  double fps = 0.0;                ///< replay rate [Hz]; 0: as fast as the consumer takes them
+  bool triggered = false;          ///< one frame per trigger() (fps is then ignored)
+  bool repeat = false;             ///< start over after the last file
+  double stamp_rate = 30.0;        ///< rate of synthetic time stamps for files without any [Hz]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// Time stamp carried by a file name, as PCL's ImageGrabber writes them:
+/// "frame_20261123T120000.123456.png" (UTC, up to 6 fraction digits) -> microseconds since the
+/// epoch; nullopt when the name carries none.
+std::optional<std::uint64_t> stampFromFileName(const std::string& file_name);
+
+/// Recorded images. Time stamps: from the file names, else frames.csv's stamp_us, else
+/// synthetic (start time + index / stamp_rate). seq is the position in the sequence.
+class ImageSequenceSource : public FrameSource {
+ public:
+  explicit ImageSequenceSource(const ImageSequenceConfig& config);
+
+  void start() override;
+  std::optional<Frame> next(std::chrono::milliseconds timeout) override;
+  void stop() override;
+  std::string name() const override;
+  SourceStats stats() const override;
+  bool live() const override { return config_.fps > 0 && !config_.triggered; }
+  bool finished() const override { return finished_; }
+  /// The files and their time stamps (after start()).
+  const std::vector<std::string>& files() const { return files_; }
+  const std::vector<std::uint64_t>& stamps() const { return stamps_; }
+
+ private:
+  void listFiles();
+  void assignStamps();
+
+  ImageSequenceConfig config_;
+  std::vector<std::string> files_;
+  std::vector<std::uint64_t> stamps_;
+  std::uint64_t position_ = 0;
+  Clock::time_point started_{};
+  std::atomic<bool> finished_{false};
+  std::atomic<std::uint64_t> frames_{0}, read_errors_{0};
+};
+
+// --- the simulator ---------------------------------------------------------------------------
+
+struct SimulatorSourceConfig {
+  std::string scenario = "ball";  ///< named scenario (scenarioNames())
+  SensorConfig sensor;            ///< the simulated sensor (its mount is the scenario's)
+  RenderConfig render;            ///< radiometry and noise
+  double fps = 0.0;               ///< frame rate [Hz]; 0: as fast as frames render
+  std::uint64_t first_frame = 0;  ///< walk frame of the first image
+  std::uint64_t frames = 0;       ///< frames to render; 0: endless
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// Renders a scenario frame by frame while the robot walks (Scenario::worldFromRobot(frame)).
+class SimulatorSource : public FrameSource {
+ public:
+  explicit SimulatorSource(const SimulatorSourceConfig& config = {});
+
+  void start() override;
+  std::optional<Frame> next(std::chrono::milliseconds timeout) override;
+  void stop() override {}
+  std::string name() const override { return "simulator (" + scenario_.name + ")"; }
+  SourceStats stats() const override;
+  bool live() const override { return config_.fps > 0; }
+  bool finished() const override;
+
+  /// The reference for these images: the bare floor at the scenario's reference pose, with the
+  /// nominal metric scale.
+  Reference makeReference(const ReferenceConfig& config = {}) const;
+  const Scenario& scenario() const { return scenario_; }
+  const Simulator& simulator() const { return simulator_; }
+
+ private:
+  SimulatorSourceConfig config_;
+  Scenario scenario_;
+  Simulator simulator_;
+  std::atomic<std::uint64_t> rendered_{0};
+  Clock::time_point started_{};
+};
+
+}  // namespace multislit

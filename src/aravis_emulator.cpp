@@ -1,0 +1,111 @@
+// CameraEmulator: Aravis's GigE Vision fake camera on 127.0.0.1, filled with our own images.
+#include "aravis_util.h"
+#include "multislit/sources.h"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+namespace multislit {
+
+using aravis::GPtr;
+
+void EmulatorConfig::validate() const {
+  auto fail = [](const std::string& field, const std::string& what) {
+    throw std::invalid_argument("EmulatorConfig." + field + " " + what);
+  };
+  if (serial.empty() || serial.size() > 15) fail("serial", "must have 1 to 15 characters");
+  if (!(fps > 0 && fps <= 1000)) fail("fps", "must be in (0, 1000]");
+  if (!(lost_packet_ratio >= 0 && lost_packet_ratio <= 1))
+    fail("lost_packet_ratio", "must be in [0, 1]");
+}
+
+struct CameraEmulator::Impl {
+  std::vector<cv::Mat> images;  // continuous, same size and type
+  std::atomic<std::uint64_t> served{0};
+  GPtr<ArvGvFakeCamera> camera;  // last: its thread stops before the images go
+
+  std::size_t index(std::uint64_t frame_id) const {
+    // Frame ids on the wire may have 16 bits (GigE Vision 1.x): use those on both ends.
+    return static_cast<std::size_t>(frame_id & 0xffffu) % images.size();
+  }
+
+  // Runs on the fake camera's thread for every frame. The buffer reports size 0 here: its
+  // capacity is the payload the camera announced, width x height x bytes per pixel, which the
+  // fake camera checked before calling.
+  static void fill(ArvBuffer* buffer, void* user, guint32 /*exposure_us*/, guint32 /*gain*/,
+                   ArvPixelFormat format) {
+    auto* self = static_cast<Impl*>(user);
+    if (format != ARV_PIXEL_FORMAT_MONO_8 && format != ARV_PIXEL_FORMAT_MONO_16) return;
+    gint x = 0, y = 0, width = 0, height = 0;
+    arv_buffer_get_image_region(buffer, &x, &y, &width, &height);
+    std::size_t reported = 0;
+    auto* out =
+        static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &reported)));
+    if (out == nullptr || width <= 0 || height <= 0) return;
+    const int out_depth = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8U : CV_16U;
+    const cv::Mat& image = self->images[self->index(arv_buffer_get_frame_id(buffer))];
+    cv::Mat target(height, width, out_depth, out);
+    target.setTo(0);
+    // The requested region of the image, converted to the requested depth.
+    const cv::Rect region = cv::Rect(x, y, width, height) & cv::Rect(0, 0, image.cols, image.rows);
+    if (region.area() > 0) {
+      const double scale = image.depth() == out_depth ? 1.0
+                           : image.depth() == CV_8U   ? 257.0
+                                                      : 1.0 / 257;
+      image(region).convertTo(
+          target(cv::Rect(region.x - x, region.y - y, region.width, region.height)), out_depth,
+          scale);
+    }
+    ++self->served;
+  }
+};
+
+CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig& config)
+    : impl_(std::make_unique<Impl>()) {
+  config.validate();
+  if (images.empty()) throw std::invalid_argument("CameraEmulator: no images");
+  for (cv::Mat& image : images) {
+    if (image.type() != CV_8UC1 && image.type() != CV_16UC1)
+      throw std::invalid_argument("CameraEmulator: images must be CV_8UC1 or CV_16UC1");
+    if (image.size() != images.front().size() || image.type() != images.front().type())
+      throw std::invalid_argument("CameraEmulator: images must share size and type");
+    impl_->images.push_back(image.isContinuous() ? image : image.clone());
+  }
+  impl_->camera.reset(arv_gv_fake_camera_new(kAddress, config.serial.c_str()));
+  if (!impl_->camera || !arv_gv_fake_camera_is_running(impl_->camera.get()))
+    throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
+                             ":3956 (is another camera running there?)");
+
+  // A sensor of the images' size, streaming all of it at the configured rate.
+  ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->camera.get());
+  const auto width = static_cast<guint32>(impl_->images.front().cols);
+  const auto height = static_cast<guint32>(impl_->images.front().rows);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
+  arv_fake_camera_write_register(
+      fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
+      impl_->images.front().depth() == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16);
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
+                                 static_cast<guint32>(1e6 / config.fps));
+  arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
+  setLostPacketRatio(config.lost_packet_ratio);
+}
+
+CameraEmulator::~CameraEmulator() { impl_->camera.reset(); }
+
+std::size_t CameraEmulator::imageIndex(std::uint64_t frame_id) const {
+  return impl_->index(frame_id);
+}
+
+std::uint64_t CameraEmulator::framesServed() const { return impl_->served; }
+
+void CameraEmulator::setLostPacketRatio(double ratio) {
+  if (!(ratio >= 0 && ratio <= 1))
+    throw std::invalid_argument("CameraEmulator: lost packet ratio must be in [0, 1]");
+  g_object_set(impl_->camera.get(), "gvsp-lost-ratio", ratio, nullptr);
+}
+
+}  // namespace multislit

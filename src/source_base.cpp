@@ -1,0 +1,47 @@
+// FrameSource: the interruptible waits every source shares.
+#include "multislit/sources.h"
+
+namespace multislit {
+
+void FrameSource::interrupt() {
+  {
+    std::lock_guard<std::mutex> lock(wait_mutex_);
+    interrupted_ = true;
+  }
+  wait_cv_.notify_all();
+}
+
+void FrameSource::trigger() {
+  {
+    std::lock_guard<std::mutex> lock(wait_mutex_);
+    ++triggers_;
+  }
+  wait_cv_.notify_all();
+}
+
+void FrameSource::resetWaits() {
+  std::lock_guard<std::mutex> lock(wait_mutex_);
+  interrupted_ = false;
+  triggers_ = 0;
+}
+
+bool FrameSource::interrupted() const {
+  std::lock_guard<std::mutex> lock(wait_mutex_);
+  return interrupted_;
+}
+
+bool FrameSource::sleepUntil(Clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(wait_mutex_);
+  wait_cv_.wait_until(lock, deadline, [this] { return interrupted_; });
+  return !interrupted_;
+}
+
+bool FrameSource::takeTrigger(Clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(wait_mutex_);
+  wait_cv_.wait_until(lock, deadline, [this] { return interrupted_ || triggers_ > 0; });
+  if (interrupted_ || triggers_ == 0) return false;
+  --triggers_;
+  return true;
+}
+
+}  // namespace multislit

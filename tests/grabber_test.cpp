@@ -1,0 +1,624 @@
+// MultiSlitGrabber: PCL signals, headers, back-pressure, stop() from callbacks and with sources
+// that hang, and end to end over GigE Vision on 127.0.0.1 (CameraEmulator + AravisSource).
+#include "multislit/grabber.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <mutex>
+#include <set>
+#include <thread>
+
+namespace multislit {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+using RdmapPtr = pcl::PointCloud<PointRDM>::ConstPtr;
+using XyzPtr = pcl::PointCloud<pcl::PointXYZ>::ConstPtr;
+using FramePtr = std::shared_ptr<const Frame>;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+std::uint64_t nowMicros() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
+bool waitFor(const std::function<bool()>& done, double ms) {
+  const auto t0 = Clock::now();
+  while (!done() && msSince(t0) < ms) std::this_thread::sleep_for(milliseconds(5));
+  return done();
+}
+
+// Fifteen straight slits: a cheap image the reference finds slits in (no rendering).
+cv::Mat slitImage(double shift) {
+  cv::Mat image(240, 480, CV_8UC1);
+  for (int u = 0; u < image.cols; ++u) {
+    double value = 20;
+    for (int k = 0; k < 15; ++k) {
+      const double d = u - (30.0 + 30.0 * k + shift);
+      value += 200 * std::exp(-0.5 * d * d / (1.3 * 1.3));
+    }
+    image.col(u).setTo(std::min(255.0, value));
+  }
+  return image;
+}
+
+const Reference& slitReference() {
+  static const Reference reference = Reference::fromImage(slitImage(0));
+  return reference;
+}
+
+// The simulated sensor: a reference with metric scale and two frames of the ball walk.
+struct SimData {
+  Reference reference;
+  std::vector<cv::Mat> frames;
+};
+
+const SimData& simData() {
+  static const SimData data = [] {
+    SimulatorSourceConfig config;
+    config.scenario = "ball";
+    config.render.supersample = 1;
+    config.frames = 2;
+    SimulatorSource source(config);
+    SimData d{source.makeReference(), {}};
+    source.start();
+    while (std::optional<Frame> f = source.next(milliseconds(100))) d.frames.push_back(f->image);
+    return d;
+  }();
+  return data;
+}
+
+// A source in memory: images in turn at a rate (0: at once), optionally finite, throwing or
+// hanging on purpose.
+class MemorySource : public FrameSource {
+ public:
+  MemorySource(std::vector<cv::Mat> images, double fps, bool live)
+      : images_(std::move(images)), fps_(fps), live_(live) {}
+
+  std::uint64_t frames = 0;  ///< finite: stop after this many; 0: endless
+  int throw_every = 0;       ///< next() throws on every n-th call; 0: never
+  int hang_after = -1;       ///< next() blocks hang_ms ignoring everything after this many frames
+  int hang_ms = 0;
+  std::atomic<int> starts{0}, stops{0};
+
+  void start() override {
+    resetWaits();
+    started_ = Clock::now();
+    count_ = 0;
+    ++starts;
+  }
+  std::optional<Frame> next(milliseconds timeout) override {
+    if (throw_every > 0 && ++calls_ % throw_every == 0) throw std::runtime_error("read failed");
+    if (hang_after >= 0 && count_ >= static_cast<std::uint64_t>(hang_after)) {
+      std::this_thread::sleep_for(milliseconds(hang_ms));  // a driver call that hangs
+      return std::nullopt;
+    }
+    if (finished()) return std::nullopt;
+    if (fps_ > 0) {
+      const auto due = started_ + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(count_ / fps_));
+      if (due > Clock::now() + timeout) {
+        sleepUntil(Clock::now() + timeout);
+        return std::nullopt;
+      }
+      if (!sleepUntil(due)) return std::nullopt;
+    }
+    const std::uint64_t seq = count_++;
+    ++delivered_;
+    return Frame{images_[seq % images_.size()], 1700000000000000 + seq * 1000, seq, Clock::now()};
+  }
+  void stop() override { ++stops; }
+  std::string name() const override { return "memory"; }
+  SourceStats stats() const override {
+    SourceStats s;
+    s.frames = delivered_;
+    return s;
+  }
+  bool live() const override { return live_; }
+  bool finished() const override { return frames > 0 && count_ >= frames; }
+
+ private:
+  std::vector<cv::Mat> images_;
+  double fps_;
+  bool live_;
+  Clock::time_point started_{};
+  std::atomic<std::uint64_t> count_{0}, delivered_{0};
+  int calls_ = 0;
+};
+
+std::vector<float> dkOf(const pcl::PointCloud<PointRDM>& cloud) {
+  std::vector<float> dk;
+  for (const PointRDM& p : cloud.points) dk.push_back(p.dk);
+  return dk;
+}
+
+// Bitwise: NaN where NaN, the same float bits elsewhere.
+bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+std::size_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+
+// --- the PCL face ----------------------------------------------------------------------------
+
+TEST(MultiSlitGrabber, OffersPclSignals) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 0, true);
+  MultiSlitGrabber grabber(source, slitReference());
+  EXPECT_EQ(grabber.getName(), "MultiSlitGrabber");
+  EXPECT_FALSE(grabber.isRunning());
+  EXPECT_TRUE(grabber.providesCallback<MultiSlitGrabber::sig_cb_rdmap>());
+  EXPECT_TRUE(grabber.providesCallback<MultiSlitGrabber::sig_cb_frame>());
+  // No metric scale, no metric cloud.
+  EXPECT_FALSE(grabber.providesCallback<MultiSlitGrabber::sig_cb_xyz>());
+  std::function<MultiSlitGrabber::sig_cb_xyz> xyz = [](const XyzPtr&) {};
+  EXPECT_THROW(grabber.registerCallback(xyz), pcl::IOException);
+  EXPECT_EQ(grabber.getFramesPerSecond(), 0.0f);
+
+  Reference scaled = slitReference();
+  scaled.scale.f = 1000;
+  scaled.scale.disparity_constant = 64;
+  MultiSlitGrabber metric(source, scaled);
+  EXPECT_TRUE(metric.providesCallback<MultiSlitGrabber::sig_cb_xyz>());
+
+  GrabberConfig bad;
+  bad.poll_ms = 0;
+  EXPECT_THROW((MultiSlitGrabber{source, slitReference(), bad}), std::invalid_argument);
+  EXPECT_THROW((MultiSlitGrabber{nullptr, slitReference()}), std::invalid_argument);
+}
+
+TEST(MultiSlitGrabber, DeliversEveryFrameOfASourceThatWaitsInOrder) {
+  const std::vector<cv::Mat> images = {slitImage(0), slitImage(2.5), slitImage(-3)};
+  auto source = std::make_shared<MemorySource>(images, 0, /*live=*/false);
+  source->frames = 12;
+  GrabberConfig config;
+  config.frame_id = "test_camera";
+  MultiSlitGrabber grabber(source, slitReference(), config);
+  std::vector<RdmapPtr> clouds;
+  std::function<MultiSlitGrabber::sig_cb_rdmap> on_cloud = [&](const RdmapPtr& cloud) {
+    std::this_thread::sleep_for(milliseconds(5));  // slower than the source: it must wait
+    clouds.push_back(cloud);
+  };
+  grabber.registerCallback(on_cloud);
+  grabber.start();
+  EXPECT_TRUE(waitFor([&] { return !grabber.isRunning(); }, 10000));  // the source finished
+  grabber.stop();
+
+  ASSERT_EQ(clouds.size(), 12u);
+  const Extractor extractor(slitReference());
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    const pcl::PointCloud<PointRDM>& c = *clouds[i];
+    EXPECT_EQ(c.header.seq, i);
+    EXPECT_EQ(c.header.stamp, 1700000000000000 + i * 1000);
+    EXPECT_EQ(c.header.frame_id, "test_camera");
+    EXPECT_EQ(c.width, static_cast<std::uint32_t>(slitReference().maxSlitLength()));
+    EXPECT_EQ(c.height, 15u);
+    EXPECT_FALSE(c.is_dense);
+    pcl::PointCloud<PointRDM> direct;
+    extractor.extract(images[i % images.size()], direct);
+    EXPECT_TRUE(sameBits(dkOf(c), dkOf(direct)));
+  }
+  const GrabberStats s = grabber.getStats();
+  EXPECT_EQ(s.frames_received, 12u);
+  EXPECT_EQ(s.frames_processed, 12u);
+  EXPECT_EQ(s.frames_dropped, 0u);
+  // The shifted slits moved by their shift.
+  const auto valid = std::count_if(clouds[1]->begin(), clouds[1]->end(),
+                                   [](const PointRDM& p) { return std::abs(p.dk - 2.5f) < 0.05f; });
+  EXPECT_GT(valid, static_cast<long>(clouds[1]->size() / 2));
+}
+
+TEST(MultiSlitGrabber, ComputesOnlyWhatIsConnected) {
+  // Images that do not fit the reference: extracting them fails, delivering them does not.
+  cv::Mat wrong(100, 100, CV_8UC1, cv::Scalar(0));
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{wrong}, 200, true);
+  MultiSlitGrabber grabber(source, slitReference());
+  std::atomic<int> frames{0};
+  std::function<MultiSlitGrabber::sig_cb_frame> on_frame = [&](const FramePtr& f) {
+    EXPECT_EQ(f->image.cols, 100);
+    ++frames;
+  };
+  grabber.registerCallback(on_frame);
+  grabber.start();
+  EXPECT_TRUE(waitFor([&] { return frames >= 10; }, 5000));
+  EXPECT_EQ(grabber.getStats().extraction_errors, 0u);  // no cloud slot: no extraction
+
+  std::function<MultiSlitGrabber::sig_cb_rdmap> on_cloud = [](const RdmapPtr&) {};
+  grabber.registerCallback(on_cloud);
+  EXPECT_TRUE(waitFor([&] { return grabber.getStats().extraction_errors >= 5; }, 5000));
+  EXPECT_TRUE(grabber.isRunning());
+  grabber.stop();
+  EXPECT_GT(grabber.getStats().frames_processed, 10u);
+}
+
+// --- back-pressure, errors, stop and destruction ---------------------------------------------
+
+TEST(MultiSlitGrabber, SlowCallbackDropsFramesWithBoundedMemory) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 200, true);
+  MultiSlitGrabber grabber(source, slitReference());
+  std::atomic<int> calls{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> slow = [&](const RdmapPtr&) {
+    std::this_thread::sleep_for(milliseconds(50));
+    ++calls;
+  };
+  grabber.registerCallback(slow);
+  const std::size_t rss_before = residentBytes();
+  grabber.start();
+  std::this_thread::sleep_for(milliseconds(1500));
+  grabber.stop();
+  const std::size_t rss_after = residentBytes();
+  const GrabberStats s = grabber.getStats();
+  EXPECT_GT(s.frames_dropped, 100u);  // ~300 frames arrive, ~30 are processed
+  EXPECT_LT(s.frames_processed, 40u);
+  EXPECT_EQ(s.frames_processed, static_cast<std::uint64_t>(calls));
+  // One slot between the threads: nothing else can be waiting.
+  EXPECT_LE(s.frames_received - s.frames_processed - s.frames_dropped, 1u);
+  EXPECT_LT(rss_after, rss_before + (64u << 20));
+  EXPECT_GT(s.frames_per_second, 5.0);
+  EXPECT_LT(s.frames_per_second, 30.0);
+}
+
+TEST(MultiSlitGrabber, StopFromInsideACallback) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 100, true);
+  MultiSlitGrabber grabber(source, slitReference());
+  std::atomic<int> calls{0};
+  std::atomic<double> stop_ms{-1};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> stopper = [&](const RdmapPtr&) {
+    if (++calls == 1) {
+      const auto t0 = Clock::now();
+      grabber.stop();
+      stop_ms = msSince(t0);
+      EXPECT_FALSE(grabber.isRunning());
+    }
+  };
+  grabber.registerCallback(stopper);
+  grabber.start();
+  ASSERT_TRUE(waitFor([&] { return stop_ms >= 0; }, 5000)) << "stop() from a callback deadlocked";
+  EXPECT_LT(stop_ms, 1000.0);
+  std::this_thread::sleep_for(milliseconds(200));
+  EXPECT_EQ(calls, 1);
+  EXPECT_FALSE(grabber.isRunning());
+  // And it starts again.
+  grabber.start();
+  EXPECT_TRUE(waitFor([&] { return calls >= 2; }, 5000));
+  grabber.stop();
+  EXPECT_TRUE(waitFor([&] { return source->stops == source->starts; }, 2000));
+}
+
+TEST(MultiSlitGrabber, HundredStartStopCycles) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 500, true);
+  MultiSlitGrabber grabber(source, slitReference());
+  std::atomic<int> clouds{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
+  grabber.registerCallback(count);
+  double worst_stop_ms = 0;
+  const auto t0 = Clock::now();
+  for (int cycle = 0; cycle < 100; ++cycle) {
+    grabber.start();
+    EXPECT_TRUE(grabber.isRunning());
+    std::this_thread::sleep_for(milliseconds(cycle % 3));
+    const auto t = Clock::now();
+    grabber.stop();
+    worst_stop_ms = std::max(worst_stop_ms, msSince(t));
+    EXPECT_FALSE(grabber.isRunning());
+  }
+  EXPECT_LT(worst_stop_ms, 1000.0);
+  EXPECT_LT(msSince(t0), 20000.0);
+  EXPECT_EQ(source->starts, 100);
+  EXPECT_EQ(source->stops, 100);
+  EXPECT_GT(clouds, 0);
+}
+
+TEST(MultiSlitGrabber, SourceErrorsAreCountedNotThrown) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 200, true);
+  source->throw_every = 3;
+  MultiSlitGrabber grabber(source, slitReference());
+  std::atomic<int> clouds{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
+  grabber.registerCallback(count);
+  grabber.start();
+  EXPECT_TRUE(waitFor([&] { return clouds >= 10; }, 5000));
+  grabber.stop();
+  EXPECT_GT(grabber.getStats().source_errors, 3u);
+}
+
+TEST(MultiSlitGrabber, StopReturnsWithinASecondWhenTheSourceHangs) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 100, true);
+  source->hang_after = 3;
+  source->hang_ms = 1500;
+  std::weak_ptr<MemorySource> weak = source;
+  auto grabber = std::make_unique<MultiSlitGrabber>(source, slitReference());
+  source.reset();
+  std::atomic<int> clouds{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
+  grabber->registerCallback(count);
+  grabber->start();
+  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }, 5000));
+  std::this_thread::sleep_for(milliseconds(100));  // now inside the hanging call
+  auto t0 = Clock::now();
+  grabber->stop();
+  EXPECT_LT(msSince(t0), 1000.0);
+  EXPECT_FALSE(grabber->isRunning());
+  // A restart waits for the stuck call to end, then runs.
+  grabber->start();
+  EXPECT_TRUE(grabber->isRunning());
+  std::this_thread::sleep_for(milliseconds(100));
+  t0 = Clock::now();
+  grabber->stop();
+  EXPECT_LT(msSince(t0), 1000.0);
+  // Destroyed while the source hangs: the destructor waits at most release_timeout_ms; the stuck
+  // thread keeps what it uses alive until the call returns.
+  grabber.reset();
+  EXPECT_TRUE(waitFor([&] { return weak.expired(); }, 5000));
+}
+
+TEST(MultiSlitGrabber, DestructionWhileRunningIsSafe) {
+  for (int i = 0; i < 10; ++i) {
+    auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 300, true);
+    auto grabber = std::make_unique<MultiSlitGrabber>(source, slitReference());
+    std::function<MultiSlitGrabber::sig_cb_rdmap> rdmap = [](const RdmapPtr&) {};
+    std::function<MultiSlitGrabber::sig_cb_frame> frame = [](const FramePtr&) {};
+    grabber->registerCallback(rdmap);
+    grabber->registerCallback(frame);
+    grabber->start();
+    std::this_thread::sleep_for(milliseconds(i * 3));
+    grabber.reset();
+    EXPECT_EQ(source->starts, source->stops);
+  }
+}
+
+// --- end to end over GigE Vision on 127.0.0.1 ------------------------------------------------
+
+std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& images,
+                                             const EmulatorConfig& config = {}) {
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  for (;;) {
+    try {
+      return std::make_unique<CameraEmulator>(images, config);
+    } catch (const std::runtime_error&) {
+      if (Clock::now() > deadline) return nullptr;
+      std::this_thread::sleep_for(milliseconds(200));
+    }
+  }
+}
+
+#define REQUIRE_EMULATOR(emulator)                                                       \
+  if (!(emulator))                                                                       \
+  GTEST_SKIP() << "127.0.0.1:3956 stayed taken by another GigE Vision camera for 30 s, " \
+                  "so the fake camera could not start"
+
+std::shared_ptr<AravisSource> gigeSource(double fps) {
+  AravisConfig c;
+  c.camera = CameraEmulator::kAddress;
+  c.roi_width = simData().frames[0].cols;
+  c.roi_height = simData().frames[0].rows;
+  c.frame_rate = fps;
+  c.packet_size = 8192;  // loopback carries large datagrams
+  return std::make_shared<AravisSource>(c);
+}
+
+TEST(GigEVision, CloudsEqualExtractingTheServedImages) {
+  const SimData& sim = simData();
+  EmulatorConfig ec;
+  ec.fps = 30;
+  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
+  REQUIRE_EMULATOR(emulator);
+  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
+  std::mutex mutex;
+  std::vector<RdmapPtr> clouds;
+  std::vector<XyzPtr> xyzs;
+  std::vector<FramePtr> frames;
+  std::function<MultiSlitGrabber::sig_cb_rdmap> on_cloud = [&](const RdmapPtr& c) {
+    std::lock_guard<std::mutex> lock(mutex);
+    clouds.push_back(c);
+  };
+  std::function<MultiSlitGrabber::sig_cb_xyz> on_xyz = [&](const XyzPtr& c) {
+    std::lock_guard<std::mutex> lock(mutex);
+    xyzs.push_back(c);
+  };
+  std::function<MultiSlitGrabber::sig_cb_frame> on_frame = [&](const FramePtr& f) {
+    std::lock_guard<std::mutex> lock(mutex);
+    frames.push_back(f);
+  };
+  grabber.registerCallback(on_cloud);
+  grabber.registerCallback(on_xyz);
+  grabber.registerCallback(on_frame);
+  grabber.start();
+  EXPECT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        return clouds.size() >= 8;
+      },
+      10000));
+  grabber.stop();
+
+  const Extractor extractor(sim.reference);
+  std::vector<std::vector<float>> expected;
+  for (const cv::Mat& image : sim.frames) {
+    pcl::PointCloud<PointRDM> direct;
+    extractor.extract(image, direct);
+    expected.push_back(dkOf(direct));
+  }
+  ASSERT_GE(clouds.size(), 8u);
+  ASSERT_EQ(xyzs.size(), clouds.size());
+  ASSERT_EQ(frames.size(), clouds.size());
+  std::set<std::size_t> seen;
+  for (std::size_t i = 0; i < clouds.size(); ++i) {
+    const pcl::PointCloud<PointRDM>& c = *clouds[i];
+    const std::size_t image = emulator->imageIndex(c.header.seq);
+    seen.insert(image);
+    EXPECT_TRUE(sameBits(dkOf(c), expected[image])) << "cloud " << i << " frame " << c.header.seq;
+    EXPECT_EQ(cv::countNonZero(frames[i]->image != sim.frames[image]), 0);
+    EXPECT_NEAR(static_cast<double>(c.header.stamp), static_cast<double>(nowMicros()), 30e6);
+    EXPECT_EQ(c.header.frame_id, "multislit_camera");
+    if (i > 0) {
+      EXPECT_GT(c.header.stamp, clouds[i - 1]->header.stamp);
+    }
+    // The metric cloud: the same points, organized, NaN kept.
+    const pcl::PointCloud<pcl::PointXYZ>& m = *xyzs[i];
+    EXPECT_EQ(m.header.seq, c.header.seq);
+    ASSERT_EQ(m.width, c.width);
+    ASSERT_EQ(m.height, c.height);
+    EXPECT_FALSE(m.is_dense);
+    std::size_t finite = 0;
+    for (std::size_t k = 0; k < m.size(); ++k) {
+      EXPECT_EQ(std::isfinite(m[k].z), std::isfinite(c[k].z));
+      if (std::isfinite(m[k].z)) {
+        ++finite;
+        EXPECT_EQ(m[k].z, c[k].z);
+      }
+    }
+    EXPECT_GT(finite, m.size() / 2);
+  }
+  EXPECT_EQ(seen.size(), sim.frames.size());  // both images went through
+}
+
+TEST(GigEVision, LostPacketsAreCountedAndSurvived) {
+  const SimData& sim = simData();
+  EmulatorConfig ec;
+  ec.fps = 60;
+  ec.lost_packet_ratio = 0.003;  // ~155 packets of 8 kB per frame: about one frame in three lost
+  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
+  REQUIRE_EMULATOR(emulator);
+  MultiSlitGrabber grabber(gigeSource(60), sim.reference);
+  const Extractor extractor(sim.reference);
+  std::atomic<int> clouds{0}, wrong{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> check = [&](const RdmapPtr& c) {
+    pcl::PointCloud<PointRDM> direct;
+    extractor.extract(sim.frames[emulator->imageIndex(c->header.seq)], direct);
+    wrong += !sameBits(dkOf(*c), dkOf(direct));
+    ++clouds;
+  };
+  grabber.registerCallback(check);
+  grabber.start();
+  std::this_thread::sleep_for(milliseconds(2500));
+  grabber.stop();
+  const GrabberStats s = grabber.getStats();
+  std::printf("lost packets 0.3%%: %llu frames good, %llu bad buffers, %llu dropped (busy)\n",
+              static_cast<unsigned long long>(s.source.frames),
+              static_cast<unsigned long long>(s.source.bad_buffers),
+              static_cast<unsigned long long>(s.frames_dropped));
+  EXPECT_GT(s.source.bad_buffers, 0u);
+  EXPECT_GT(clouds, 0);
+  EXPECT_EQ(wrong, 0);  // a broken frame never reaches the callbacks
+}
+
+TEST(GigEVision, StopWithinASecondWhenTheCameraStopsSendingOrGoesAway) {
+  const SimData& sim = simData();
+  std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames);
+  REQUIRE_EMULATOR(emulator);
+  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
+  std::atomic<int> clouds{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
+  grabber.registerCallback(count);
+
+  // 1. The camera answers but sends nothing.
+  grabber.start();
+  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }, 10000));
+  emulator->setLostPacketRatio(1.0);
+  std::this_thread::sleep_for(milliseconds(500));
+  auto t0 = Clock::now();
+  grabber.stop();
+  const double silent_ms = msSince(t0);
+  EXPECT_LT(silent_ms, 1000.0);
+
+  // 2. The camera is gone: its control requests time out in Aravis, stop() does not wait.
+  emulator->setLostPacketRatio(0.0);
+  const int before = clouds;
+  grabber.start();
+  ASSERT_TRUE(waitFor([&] { return clouds >= before + 3; }, 10000));
+  emulator.reset();
+  std::this_thread::sleep_for(milliseconds(300));
+  t0 = Clock::now();
+  grabber.stop();
+  const double gone_ms = msSince(t0);
+  EXPECT_LT(gone_ms, 1000.0);
+  std::printf("stop(): %.1f ms with a silent camera, %.1f ms with a vanished one\n", silent_ms,
+              gone_ms);
+  emulator = makeEmulator(sim.frames);  // lets the stuck release finish soon
+}
+
+TEST(GigEVision, StartStopCycles) {
+  const SimData& sim = simData();
+  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames);
+  REQUIRE_EMULATOR(emulator);
+  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
+  std::atomic<int> clouds{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
+  grabber.registerCallback(count);
+  double worst_ms = 0;
+  for (int cycle = 0; cycle < 10; ++cycle) {
+    grabber.start();
+    std::this_thread::sleep_for(milliseconds(50 * (cycle % 3)));
+    const auto t0 = Clock::now();
+    grabber.stop();
+    worst_ms = std::max(worst_ms, msSince(t0));
+  }
+  EXPECT_LT(worst_ms, 1000.0);
+  EXPECT_GT(clouds, 0);
+  EXPECT_EQ(grabber.getStats().source.reconnects, 0u);
+}
+
+TEST(GigEVision, FullSizeThroughputAndLatency) {
+  const SimData& sim = simData();
+  EmulatorConfig ec;
+  ec.fps = 200;
+  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
+  REQUIRE_EMULATOR(emulator);
+  MultiSlitGrabber grabber(gigeSource(200), sim.reference);
+  // The emulated camera's 16-bit frame ids wrap after ~135 frames: seq must still increase.
+  std::uint32_t last_seq = 0;
+  std::uint64_t last_stamp = 0;
+  std::atomic<int> backwards{0};
+  std::function<MultiSlitGrabber::sig_cb_rdmap> consume = [&](const RdmapPtr& c) {
+    backwards += last_stamp != 0 && (c->header.seq <= last_seq || c->header.stamp <= last_stamp);
+    last_seq = c->header.seq;
+    last_stamp = c->header.stamp;
+  };
+  grabber.registerCallback(consume);
+  grabber.start();
+  std::this_thread::sleep_for(milliseconds(1000));  // settle
+  const GrabberStats a = grabber.getStats();
+  const auto t0 = Clock::now();
+  std::this_thread::sleep_for(milliseconds(2000));
+  const GrabberStats b = grabber.getStats();
+  const double seconds = msSince(t0) / 1000;
+  grabber.stop();
+  const double received = static_cast<double>(b.frames_received - a.frames_received) / seconds;
+  const double processed = static_cast<double>(b.frames_processed - a.frames_processed) / seconds;
+  std::printf(
+      "GigE Vision 1296x964 Mono8 on 127.0.0.1: %.1f frames/s received, %.1f processed; latency "
+      "arrival -> callback median %.2f ms, 99th %.2f ms; %llu dropped, %llu bad buffers\n",
+      received, processed, b.latency_median_ms, b.latency_p99_ms,
+      static_cast<unsigned long long>(b.frames_dropped),
+      static_cast<unsigned long long>(b.source.bad_buffers));
+  RecordProperty("received_fps", std::to_string(received));
+  RecordProperty("latency_median_ms", std::to_string(b.latency_median_ms));
+  RecordProperty("latency_p99_ms", std::to_string(b.latency_p99_ms));
+  EXPECT_EQ(backwards, 0);
+  EXPECT_GT(processed, 10.0);
+  EXPECT_GT(b.latency_median_ms, 0.0);
+  EXPECT_LT(b.latency_median_ms, 100.0);
+}
+
+}  // namespace
+}  // namespace multislit
