@@ -1,5 +1,6 @@
 #include "multislit/extractor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -22,34 +23,64 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   config_.validate();
   if (reference_.slits.empty() || reference_.region_width < 3)
     throw std::invalid_argument("extractor: the reference has no slits or no assigned regions");
-}
-
-template <typename T>
-void Extractor::extractRows(const cv::Mat& image, const ProfileParams& params,
-                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
-  const MetricScale& scale = reference_.scale;
-  const bool metric = scale.valid();
+  // The cloud with nothing measured: one row per slit, one column per reference row.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
+  blank_.resize(width * reference_.slits.size());
+  const bool metric = reference_.scale.valid();
   const double half = 0.5 * reference_.region_width;
   for (std::size_t s = 0; s < reference_.slits.size(); ++s) {
     const ReferenceSlit& slit = reference_.slits[s];
     const bool has_inf = metric && slit.u_inf.size() == slit.u.size();
-    for (std::size_t k = 0; k < slit.u.size(); ++k) {
-      const float u = slit.u[k];
-      if (!std::isfinite(u)) continue;
-      ++stats.reference_points;
-      const int row = slit.first_row + static_cast<int>(k);
+    for (std::size_t k = 0; k < width; ++k) {
+      PointRDM& p = blank_[s * width + k];
+      p.x = p.y = p.z = p.dk = nan;
+      p.u = k < slit.u.size() ? slit.u[k] : nan;
+      p.v = static_cast<float>(slit.first_row + static_cast<int>(k));
+      p.slit = static_cast<std::int32_t>(s);
+      if (!std::isfinite(p.u)) continue;
       // Search the slit only inside this point's assigned region on its row (Fig. 7).
-      Peak peak;
-      if (!measurePeak(image.ptr<T>(row), image.cols, static_cast<int>(std::ceil(u - half)),
-                       static_cast<int>(std::floor(u + half)), params, &peak))
-        continue;
-      PointRDM& p = cloud.at(static_cast<int>(k), static_cast<int>(s));
-      p.dk = static_cast<float>(peak.centre - u);
-      if (has_inf && std::isfinite(slit.u_inf[k])) {
-        const double depth = scale.disparity_constant / (peak.centre - slit.u_inf[k]);
+      Task t;
+      t.row = slit.first_row + static_cast<int>(k);
+      t.first = static_cast<int>(std::ceil(p.u - half));
+      t.last = static_cast<int>(std::floor(p.u + half));
+      t.cell = static_cast<std::uint32_t>(s * width + k);
+      t.u = p.u;
+      t.u_inf = has_inf && std::isfinite(slit.u_inf[k]) ? slit.u_inf[k] : nan;
+      tasks_.push_back(t);
+    }
+  }
+  std::sort(tasks_.begin(), tasks_.end(), [](const Task& a, const Task& b) {
+    return a.row != b.row ? a.row < b.row : a.first < b.first;
+  });
+}
+
+template <typename T>
+void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
+                           pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
+  const MetricScale& scale = reference_.scale;
+  PointRDM* points = cloud.points.data();
+  constexpr std::size_t kBatch = 64;  // regions measured per call
+  PeakRegion<T> regions[kBatch];
+  Peak peaks[kBatch];
+  bool found[kBatch];
+  for (std::size_t begin = 0; begin < tasks_.size(); begin += kBatch) {
+    const std::size_t n = std::min(kBatch, tasks_.size() - begin);
+    const Task* tasks = tasks_.data() + begin;
+    for (std::size_t i = 0; i < n; ++i)
+      regions[i] = {image.ptr<T>(tasks[i].row), tasks[i].first, tasks[i].last};
+    measurePeaks(regions, n, image.cols, params, peaks, found);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!found[i]) continue;
+      const Task& t = tasks[i];
+      const double centre = peaks[i].centre;
+      PointRDM& p = points[t.cell];
+      p.dk = static_cast<float>(centre - t.u);
+      if (std::isfinite(t.u_inf)) {
+        const double depth = scale.disparity_constant / (centre - t.u_inf);
         if (depth > 0) {
-          p.x = static_cast<float>((peak.centre - scale.cx) * depth / scale.f);
-          p.y = static_cast<float>((row - scale.cy) * depth / scale.f);
+          p.x = static_cast<float>((centre - scale.cx) * depth / scale.f);
+          p.y = static_cast<float>((t.row - scale.cy) * depth / scale.f);
           p.z = static_cast<float>(depth);
         }
       }
@@ -72,26 +103,16 @@ ExtractionStats Extractor::extract(const cv::Mat& image, pcl::PointCloud<PointRD
   params.half_window = std::max(3, static_cast<int>(std::lround(1.25 * reference_.profile_width)));
   params.window_sigma = reference_.profile_width / 2.3548;  // FWHM to sigma
 
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   cloud.width = static_cast<std::uint32_t>(reference_.maxSlitLength());
   cloud.height = static_cast<std::uint32_t>(reference_.slits.size());
   cloud.is_dense = false;
-  cloud.points.resize(static_cast<std::size_t>(cloud.width) * cloud.height);
-  for (std::size_t s = 0; s < reference_.slits.size(); ++s) {
-    const ReferenceSlit& slit = reference_.slits[s];
-    for (std::uint32_t k = 0; k < cloud.width; ++k) {
-      PointRDM& p = cloud.at(static_cast<int>(k), static_cast<int>(s));
-      p.x = p.y = p.z = p.dk = nan;
-      p.u = k < slit.u.size() ? slit.u[k] : nan;
-      p.v = static_cast<float>(slit.first_row + static_cast<int>(k));
-      p.slit = static_cast<std::int32_t>(s);
-    }
-  }
+  cloud.points = blank_;
   ExtractionStats stats;
+  stats.reference_points = tasks_.size();
   if (image.depth() == CV_8U)
-    extractRows<uint8_t>(image, params, cloud, stats);
+    measureAll<uint8_t>(image, params, cloud, stats);
   else
-    extractRows<uint16_t>(image, params, cloud, stats);
+    measureAll<uint16_t>(image, params, cloud, stats);
   return stats;
 }
 

@@ -2,6 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define MULTISLIT_X86 1  // SSE2 is part of x86-64; AVX2 is chosen at run time
+#include <immintrin.h>
+#endif
 
 namespace multislit {
 namespace {
@@ -34,6 +40,36 @@ bool flankBackground(const T* row, int columns, int lo, int hi, Background* bg) 
   bg->slope = (right / nr - bg->at_left) / (xr - xl);
   return true;
 }
+
+/// ln(v) for a finite v >= 2^-1000 to within one ulp, inlined and branch-free (no table, so
+/// the vector code needs no gathers): v = 2^k z with z in [sqrt(1/2), sqrt(2)), f = z - 1,
+/// s = f / (2 + f), ln z = 2 atanh(s) = f - s (f - R(s)) by fdlibm's minimax R, whose error is
+/// below 2^-58 (FreeBSD msun e_log.c). The vector code has the same operations, so both give the
+/// same bits.
+struct FastLog {
+  static constexpr std::uint64_t kOff = 0x3fe6a09e667f3bcd;  // sqrt(1/2)
+  static constexpr double kLn2Hi = 6.93147180369123816490e-01, kLn2Lo = 1.90821492927058770002e-10;
+  static constexpr double kLg1 = 6.666666666666735130e-01, kLg2 = 3.999999999940941908e-01,
+                          kLg3 = 2.857142874366239149e-01, kLg4 = 2.222219843214978396e-01,
+                          kLg5 = 1.818357216161805012e-01, kLg6 = 1.531383769920937332e-01,
+                          kLg7 = 1.479819860511658591e-01;
+
+  static double log(double v) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    const std::uint64_t shifted = bits - kOff;
+    const auto k = static_cast<double>(static_cast<std::int64_t>(shifted) >> 52);
+    const std::uint64_t z_bits = bits - (shifted & (std::uint64_t{0xfff} << 52));
+    double z;
+    std::memcpy(&z, &z_bits, sizeof z);
+    // ln(2^k (1 + f)), f in [sqrt(1/2) - 1, sqrt(2) - 1)
+    const double f = z - 1.0, s = f / (2.0 + f), s2 = s * s, s4 = s2 * s2;
+    const double r =
+        s4 * (kLg2 + s4 * (kLg4 + s4 * kLg6)) + s2 * (kLg1 + s4 * (kLg3 + s4 * (kLg5 + s4 * kLg7)));
+    const double half_f2 = 0.5 * f * f;
+    return k * kLn2Hi - ((half_f2 - (s * (half_f2 + r) + k * kLn2Lo)) - f);
+  }
+};
 
 template <typename T>
 double centroid(const T* row, int lo, int hi, const Background& bg, double floor) {
@@ -70,24 +106,45 @@ double windowedCentroid(const T* row, int lo, int hi, double start, const Backgr
   return centre;
 }
 
-// Caruana's Gaussian fit: ln(v) = a + b x + c x^2, weighted by v^2; centre -b / 2c.
+/// Pixels above half the contrast (the profile's width), counted in the pass that gathers
+/// the sums of Caruana's fit when `fit` is set.
+struct ProfilePass {
+  int width = 0;
+  int used = 0;                   ///< pixels in the fit (above the floor)
+  double s[5] = {0, 0, 0, 0, 0};  ///< sum of w d^k, w = v^2, d = x - top
+  double r[3] = {0, 0, 0};        ///< sum of w ln(v) d^k
+};
+
+// One pass over the profile: its width, and with `fit` the sums of the Gaussian fit
+// ln(v) = a + b d + c d^2 weighted by v^2 over the pixels above `floor`.
 template <typename T>
-bool gaussianCentre(const T* row, int lo, int hi, int top, const Background& bg, double floor,
-                    double* centre) {
-  double s[5] = {0, 0, 0, 0, 0}, r[3] = {0, 0, 0};
-  int used = 0;
+ProfilePass profilePass(const T* row, int lo, int hi, int top, const Background& bg, double half,
+                        double floor, bool fit) {
+  int width = 0, used = 0;
+  double s0 = 0, s1 = 0, s2 = 0, s3 = 0, s4 = 0, r0 = 0, r1 = 0, r2 = 0;  // in registers
   for (int x = lo; x <= hi; ++x) {
     const double v = row[x] - bg(x);
-    if (v <= floor) continue;
-    const double w = v * v, l = std::log(v), d = x - top;
-    double p = w;
-    for (int k = 0; k < 5; ++k, p *= d) s[k] += p;
-    r[0] += w * l;
-    r[1] += w * l * d;
-    r[2] += w * l * d * d;
+    width += v > half;
+    if (!fit || !(v > floor)) continue;
+    const double w = v * v, wl = w * FastLog::log(v), d = x - top, d2 = d * d;
+    s0 += w;
+    s1 += w * d;
+    s2 += w * d2;
+    s3 += w * (d2 * d);
+    s4 += w * (d2 * d2);
+    r0 += wl;
+    r1 += wl * d;
+    r2 += wl * d2;
     ++used;
   }
-  if (used < 3) return false;
+  return {width, used, {s0, s1, s2, s3, s4}, {r0, r1, r2}};
+}
+
+// Caruana's Gaussian fit: ln(v) = a + b x + c x^2, weighted by v^2; centre -b / 2c.
+bool gaussianCentre(const ProfilePass& pass, int top, int span, double* centre) {
+  if (pass.used < 3) return false;
+  const double* s = pass.s;
+  const double* r = pass.r;
   // Normal equations [s0 s1 s2; s1 s2 s3; s2 s3 s4] (a b c) = r, by Cramer's rule.
   const double m00 = s[0], m01 = s[1], m02 = s[2], m11 = s[2], m12 = s[3], m22 = s[4];
   const double det =
@@ -101,10 +158,48 @@ bool gaussianCentre(const T* row, int lo, int hi, int top, const Background& bg,
                    det;
   if (!(c < 0)) return false;
   const double offset = -b / (2 * c);
-  if (!(std::abs(offset) <= hi - lo)) return false;
+  if (!(std::abs(offset) <= span)) return false;
   *centre = top + offset;
   return true;
 }
+
+/// Index of the first largest of the n > 0 values at p (std::max_element).
+template <typename T>
+int firstMax(const T* p, int n) {
+  T best = p[0];
+  for (int i = 1; i < n; ++i) best = std::max(best, p[i]);  // vectorizes: no branch
+  int i = 0;
+  while (p[i] != best) ++i;
+  return i;
+}
+
+#if defined(MULTISLIT_X86)
+// 8-bit rows (the usual camera format): 16 pixels per instruction. The loads stay inside
+// [p, p + n): the last block overlaps the one before it.
+template <>
+int firstMax<std::uint8_t>(const std::uint8_t* p, int n) {
+  if (n < 16) {
+    std::uint8_t best = p[0];
+    for (int i = 1; i < n; ++i) best = std::max(best, p[i]);
+    int i = 0;
+    while (p[i] != best) ++i;
+    return i;
+  }
+  const auto load = [p](int i) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
+  __m128i m = load(n - 16);
+  for (int i = 0; i + 16 < n; i += 16) m = _mm_max_epu8(m, load(i));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
+  m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
+  const __m128i best = _mm_set1_epi8(static_cast<char>(_mm_cvtsi128_si32(m) & 0xff));
+  for (int i = 0;; i += 16) {
+    const int at = std::min(i, n - 16);
+    const int hits = _mm_movemask_epi8(_mm_cmpeq_epi8(load(at), best));
+    if (hits != 0) return at + __builtin_ctz(static_cast<unsigned>(hits));
+  }
+}
+#endif
 
 }  // namespace
 
@@ -123,22 +218,21 @@ bool measurePeakAt(const T* row, int columns, int top, const ProfileParams& p, P
   const double contrast = row[top] - bg(top);
   if (contrast < p.min_contrast) return false;
   const int first = std::max(lo, 0), last = std::min(hi, columns - 1);
-  int width = 0;
-  for (int x = first; x <= last; ++x) width += (row[x] - bg(x)) > 0.5 * contrast;
-  if (width < p.min_width || width > p.max_width) return false;
-
   const double floor = p.fit_threshold * contrast;
+  const bool fit = !saturated && p.estimator == Estimator::Gaussian;
+  const ProfilePass pass = profilePass(row, first, last, top, bg, 0.5 * contrast, floor, fit);
+  if (pass.width < p.min_width || pass.width > p.max_width) return false;
+
   double centre = 0;
   if (p.estimator == Estimator::Windowed) {
     centre = windowedCentroid(row, first, last, centroid(row, first, last, bg, floor), bg,
                               p.window_sigma);
-  } else if (saturated || p.estimator == Estimator::Centroid ||
-             !gaussianCentre(row, first, last, top, bg, floor, &centre)) {
+  } else if (!fit || !gaussianCentre(pass, top, last - first, &centre)) {
     centre = centroid(row, first, last, bg, floor);
   }
   peak->centre = centre;
   peak->contrast = contrast;
-  peak->width = width;
+  peak->width = pass.width;
   peak->saturated = saturated;
   return true;
 }
@@ -149,17 +243,190 @@ bool measurePeak(const T* row, int columns, int first, int last, const ProfilePa
   first = std::max(first, 0);
   last = std::min(last, columns - 1);
   if (first > last) return false;
-  const T* top = std::max_element(row + first, row + last + 1);
-  const int x = static_cast<int>(top - row);
+  const int x = first + firstMax(row + first, last - first + 1);
   // A maximum on the region's border that keeps rising outside belongs to a profile outside.
-  if (x == first && first > 0 && row[first - 1] > *top) return false;
-  if (x == last && last < columns - 1 && row[last + 1] > *top) return false;
+  if (x == first && first > 0 && row[first - 1] > row[x]) return false;
+  if (x == last && last < columns - 1 && row[last + 1] > row[x]) return false;
   return measurePeakAt(row, columns, x, p, peak);
+}
+
+namespace {
+
+#if defined(MULTISLIT_X86)
+// Four profiles at a time with AVX2 (x86-64 CPUs since 2013, chosen at run time), one per lane
+// of a vector of doubles. Every lane runs the operations measurePeakAt() runs for one profile,
+// in the same order (the pixels out of the fit add zeros), so the results are the same bits.
+
+bool hasAvx2() {
+  static const bool yes = __builtin_cpu_supports("avx2");
+  return yes;
+}
+
+/// FastLog::log of four values, with the same operations.
+inline __attribute__((target("avx2"), always_inline)) __m256d logFour(__m256d v) {
+  const __m256i bits = _mm256_castpd_si256(v);
+  const __m256i shifted = _mm256_sub_epi64(bits, _mm256_set1_epi64x(FastLog::kOff));
+  const __m256i top12 = _mm256_and_si256(shifted, _mm256_set1_epi64x(0xfffLL << 52));
+  const __m256d z = _mm256_castsi256_pd(_mm256_sub_epi64(bits, top12));
+  // k: the 12 top bits n of `shifted` through the double 2^52 + n, less 4096 when negative.
+  const __m256d two52 = _mm256_set1_pd(4503599627370496.0);
+  __m256d k = _mm256_castsi256_pd(
+                  _mm256_or_si256(_mm256_srli_epi64(shifted, 52), _mm256_castpd_si256(two52))) -
+              two52;
+  k -= _mm256_and_pd(_mm256_cmp_pd(k, _mm256_set1_pd(2048.0), _CMP_GE_OQ), _mm256_set1_pd(4096.0));
+  const __m256d f = z - 1.0, s = f / (2.0 + f), s2 = s * s, s4 = s2 * s2;
+  const __m256d r =
+      s4 * (FastLog::kLg2 + s4 * (FastLog::kLg4 + s4 * FastLog::kLg6)) +
+      s2 * (FastLog::kLg1 + s4 * (FastLog::kLg3 + s4 * (FastLog::kLg5 + s4 * FastLog::kLg7)));
+  const __m256d half_f2 = 0.5 * f * f;
+  return k * FastLog::kLn2Hi - ((half_f2 - (s * (half_f2 + r) + k * FastLog::kLn2Lo)) - f);
+}
+
+/// The profiles of four lanes around their maxima `top` (not saturated, both flanks inside the
+/// row): background, contrast, width and the sums of the Gaussian fit, as profilePass().
+struct FourProfiles {
+  alignas(32) double contrast[4], at_left[4], x_left[4], slope[4];
+  alignas(32) std::int64_t width[4], used[4];
+  alignas(32) double s[5][4], r[3][4];
+};
+
+template <typename T>
+__attribute__((target("avx2"))) FourProfiles fourProfiles(const T* const rows[4], const int tops[4],
+                                                          const ProfileParams& p) {
+  const int hw = p.half_window;
+  FourProfiles out;
+  alignas(32) double left[4], right[4], peak[4], lo[4];
+  const T* window[4];
+  for (int l = 0; l < 4; ++l) {
+    const T* q = rows[l] + tops[l];
+    left[l] = static_cast<double>(q[-hw - 3] + q[-hw - 2] + q[-hw - 1]);
+    right[l] = static_cast<double>(q[hw + 1] + q[hw + 2] + q[hw + 3]);
+    peak[l] = q[0];
+    lo[l] = tops[l] - hw;
+    window[l] = q - hw;
+  }
+  // The flanks' background line and the contrast, as flankBackground() and measurePeakAt().
+  const __m256d x_lo = _mm256_load_pd(lo), x_left = x_lo - 2.0;
+  const __m256d at_left = _mm256_load_pd(left) / 3.0;
+  const __m256d slope =
+      (_mm256_load_pd(right) / 3.0 - at_left) / ((x_lo + 2.0 * hw + 2.0) - x_left);
+  const __m256d x_top = x_lo + static_cast<double>(hw);
+  const __m256d contrast = _mm256_load_pd(peak) - (at_left + slope * (x_top - x_left));
+  const __m256d half = 0.5 * contrast, floor = p.fit_threshold * contrast;
+  const __m256d one = _mm256_set1_pd(1.0);
+  __m256i width = _mm256_setzero_si256(), used = width;
+  __m256d s0 = _mm256_setzero_pd(), s1 = s0, s2 = s0, s3 = s0, s4 = s0, r0 = s0, r1 = s0, r2 = s0;
+  for (int j = 0; j <= 2 * hw; ++j) {
+    const __m256d x = x_lo + static_cast<double>(j);
+    const __m256d pixels =
+        _mm256_cvtepi32_pd(_mm_set_epi32(window[3][j], window[2][j], window[1][j], window[0][j]));
+    const __m256d v = pixels - (at_left + slope * (x - x_left));
+    width = _mm256_sub_epi64(width, _mm256_castpd_si256(_mm256_cmp_pd(v, half, _CMP_GT_OQ)));
+    const __m256d in = _mm256_cmp_pd(v, floor, _CMP_GT_OQ);
+    if (_mm256_movemask_pd(in) == 0) continue;
+    used = _mm256_sub_epi64(used, _mm256_castpd_si256(in));
+    const __m256d w = _mm256_and_pd(v * v, in);  // 0 outside the fit
+    const __m256d wl = w * logFour(_mm256_blendv_pd(one, v, in));
+    const double d = j - hw, d2 = d * d, d3 = d2 * d, d4 = d2 * d2;
+    s0 += w;
+    s1 += w * d;
+    s2 += w * d2;
+    s3 += w * d3;
+    s4 += w * d4;
+    r0 += wl;
+    r1 += wl * d;
+    r2 += wl * d2;
+  }
+  _mm256_store_pd(out.contrast, contrast);
+  _mm256_store_pd(out.at_left, at_left);
+  _mm256_store_pd(out.x_left, x_left);
+  _mm256_store_pd(out.slope, slope);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.width), width);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.used), used);
+  const __m256d sums[8] = {s0, s1, s2, s3, s4, r0, r1, r2};
+  for (int k = 0; k < 5; ++k) _mm256_store_pd(out.s[k], sums[k]);
+  for (int k = 0; k < 3; ++k) _mm256_store_pd(out.r[k], sums[5 + k]);
+  return out;
+}
+
+template <typename T>
+void measureFour(const PeakRegion<T>* regions, int count, int columns, const ProfileParams& p,
+                 Peak* peaks, bool* found) {
+  // 1. Each region's maximum, as measurePeak(); the profiles four lanes cannot take (saturated,
+  // or a flank outside the row) are measured one by one.
+  const T* rows[4];
+  int tops[4], slots[4], lanes = 0;
+  for (int i = 0; i < count; ++i) {
+    const PeakRegion<T>& region = regions[i];
+    const T* row = region.row;
+    const int first = std::max(region.first, 0), last = std::min(region.last, columns - 1);
+    found[i] = false;
+    if (first > last) continue;
+    const int x = first + firstMax(row + first, last - first + 1);
+    if (x == first && first > 0 && row[first - 1] > row[x]) continue;
+    if (x == last && last < columns - 1 && row[last + 1] > row[x]) continue;
+    if (row[x] >= p.saturation || x - p.half_window - 3 < 0 ||
+        x + p.half_window + 3 > columns - 1) {
+      found[i] = measurePeakAt(row, columns, x, p, &peaks[i]);
+      continue;
+    }
+    rows[lanes] = row;
+    tops[lanes] = x;
+    slots[lanes++] = i;
+  }
+  if (lanes == 0) return;
+  for (int l = lanes; l < 4; ++l) rows[l] = rows[0], tops[l] = tops[0];  // spare lanes: a copy
+  // 2. The four profiles at once, then each lane's tests and centre as measurePeakAt().
+  const FourProfiles f = fourProfiles(rows, tops, p);
+  for (int l = 0; l < lanes; ++l) {
+    const auto width = static_cast<int>(f.width[l]);
+    if (f.contrast[l] < p.min_contrast || width < p.min_width || width > p.max_width) continue;
+    ProfilePass pass{width,
+                     static_cast<int>(f.used[l]),
+                     {f.s[0][l], f.s[1][l], f.s[2][l], f.s[3][l], f.s[4][l]},
+                     {f.r[0][l], f.r[1][l], f.r[2][l]}};
+    Peak& peak = peaks[slots[l]];
+    const int top = tops[l], lo = top - p.half_window, hi = top + p.half_window;
+    if (!gaussianCentre(pass, top, hi - lo, &peak.centre)) {
+      Background bg;
+      bg.at_left = f.at_left[l];
+      bg.x_left = f.x_left[l];
+      bg.slope = f.slope[l];
+      peak.centre = centroid(rows[l], lo, hi, bg, p.fit_threshold * f.contrast[l]);
+    }
+    peak.contrast = f.contrast[l];
+    peak.width = width;
+    peak.saturated = false;
+    found[slots[l]] = true;
+  }
+}
+#endif
+
+}  // namespace
+
+template <typename T>
+void measurePeaks(const PeakRegion<T>* regions, std::size_t count, int columns,
+                  const ProfileParams& params, Peak* peaks, bool* found) {
+#if defined(MULTISLIT_X86)
+  if (params.estimator == Estimator::Gaussian && hasAvx2()) {
+    for (std::size_t i = 0; i < count; i += 4)
+      measureFour(regions + i, static_cast<int>(std::min<std::size_t>(4, count - i)), columns,
+                  params, peaks + i, found + i);
+    return;
+  }
+#endif
+  for (std::size_t i = 0; i < count; ++i)
+    found[i] =
+        measurePeak(regions[i].row, columns, regions[i].first, regions[i].last, params, &peaks[i]);
 }
 
 template bool measurePeak<uint8_t>(const uint8_t*, int, int, int, const ProfileParams&, Peak*);
 template bool measurePeak<uint16_t>(const uint16_t*, int, int, int, const ProfileParams&, Peak*);
 template bool measurePeakAt<uint8_t>(const uint8_t*, int, int, const ProfileParams&, Peak*);
 template bool measurePeakAt<uint16_t>(const uint16_t*, int, int, const ProfileParams&, Peak*);
+template void measurePeaks<uint8_t>(const PeakRegion<uint8_t>*, std::size_t, int,
+                                    const ProfileParams&, Peak*, bool*);
+template void measurePeaks<uint16_t>(const PeakRegion<uint16_t>*, std::size_t, int,
+                                     const ProfileParams&, Peak*, bool*);
 
 }  // namespace multislit

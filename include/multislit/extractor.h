@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace multislit {
 
@@ -48,12 +49,24 @@ class Extractor {
                                          std::uint32_t seq) const;
 
  private:
+  /// One reference point, prepared once: its assigned region on its image row (Fig. 7) and
+  /// where its measure goes.
+  struct Task {
+    int row = 0;              ///< image row [px]
+    int first = 0, last = 0;  ///< assigned region: first and last column [px]
+    std::uint32_t cell = 0;   ///< index of the point in the cloud
+    float u = 0;              ///< reference column [px]
+    float u_inf = 0;          ///< column of the ray at infinite depth [px]; NaN: no metric scale
+  };
+
   template <typename T>
-  void extractRows(const cv::Mat& image, const ProfileParams& params,
-                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
+  void measureAll(const cv::Mat& image, const ProfileParams& params,
+                  pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
 
   Reference reference_;
   ExtractorConfig config_;
+  std::vector<Task> tasks_;  ///< by image row, then column: the image is read top to bottom once
+  pcl::PointCloud<PointRDM>::VectorType blank_;  ///< the cloud before anything is measured
 };
 
 }  // namespace multislit

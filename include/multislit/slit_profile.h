@@ -2,6 +2,7 @@
 // the horizontal direction"), with background removal and validity tests.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace multislit {
@@ -44,6 +45,21 @@ bool measurePeak(const T* row, int columns, int first, int last, const ProfilePa
 template <typename T>
 bool measurePeakAt(const T* row, int columns, int top, const ProfileParams& params, Peak* peak);
 
+/// One region of measurePeaks(): columns [first, last] of an image row.
+template <typename T>
+struct PeakRegion {
+  const T* row = nullptr;
+  int first = 0, last = 0;
+};
+
+/// measurePeak() of `count` regions of rows `columns` wide: found[i] and peaks[i] are what
+/// measurePeak(regions[i].row, columns, regions[i].first, regions[i].last, ...) returns and
+/// measures, bit for bit. Faster: with the Gaussian estimator, CPUs with AVX2 measure four
+/// profiles at a time.
+template <typename T>
+void measurePeaks(const PeakRegion<T>* regions, std::size_t count, int columns,
+                  const ProfileParams& params, Peak* peaks, bool* found);
+
 extern template bool measurePeak<uint8_t>(const uint8_t*, int, int, int, const ProfileParams&,
                                           Peak*);
 extern template bool measurePeak<uint16_t>(const uint16_t*, int, int, int, const ProfileParams&,
@@ -51,5 +67,9 @@ extern template bool measurePeak<uint16_t>(const uint16_t*, int, int, int, const
 extern template bool measurePeakAt<uint8_t>(const uint8_t*, int, int, const ProfileParams&, Peak*);
 extern template bool measurePeakAt<uint16_t>(const uint16_t*, int, int, const ProfileParams&,
                                              Peak*);
+extern template void measurePeaks<uint8_t>(const PeakRegion<uint8_t>*, std::size_t, int,
+                                           const ProfileParams&, Peak*, bool*);
+extern template void measurePeaks<uint16_t>(const PeakRegion<uint16_t>*, std::size_t, int,
+                                            const ProfileParams&, Peak*, bool*);
 
 }  // namespace multislit
