@@ -54,19 +54,29 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   const float b = static_cast<float>(result.plane[1]);
   const float c = static_cast<float>(result.plane[2]);
   const float t = static_cast<float>(threshold);
-  result.inliers.reserve(valid.size());
+  // Branch-free: each point is written to both lists, and the one it belongs to moves on.
+  const std::size_t n = valid.size();
+  result.inliers.resize(n);
+  result.obstacles.resize(n);
+  result.obstacle_residuals.resize(n);
+  std::size_t floor = 0, off = 0;
   double sum_sq = 0.0;
   for (const auto i : valid) {
     const PointRDM& p = cloud[i];
     const float r = p.dk - (a * p.u + b * p.v + c);
-    if (std::abs(r) <= t) {
-      result.inliers.push_back(i);
-      sum_sq += static_cast<double>(r) * r;
-    } else {
-      result.obstacles.push_back(i);
-      result.obstacle_residuals.push_back(r);
-    }
+    const bool in = std::abs(r) <= t;
+    result.inliers[floor] = i;
+    result.obstacles[off] = i;
+    result.obstacle_residuals[off] = r;
+    sum_sq += in ? static_cast<double>(r) * r : 0.0;
+    floor += in;
+    off += !in;
   }
+  result.inliers.resize(floor);
+  result.obstacles.resize(off);
+  result.obstacle_residuals.resize(off);
+  result.obstacles.shrink_to_fit();
+  result.obstacle_residuals.shrink_to_fit();
   if (!result.inliers.empty())
     result.residual_std = std::sqrt(sum_sq / static_cast<double>(result.inliers.size()));
 }

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -89,6 +91,89 @@ class PlaneSums {
   std::size_t n_ = 0;
 };
 
+/// Points of the centred arrays within t of the plane dk = a u + b v + c, over [begin, end): the
+/// hot loop of RANSAC. Also compiled for AVX2 (eight points per instruction, chosen at run time);
+/// both clones make the same float operations, so they count the same.
+__attribute__((target_clones("avx2", "default"))) unsigned countNear(const float* u, const float* v,
+                                                                     const float* dk,
+                                                                     std::size_t begin,
+                                                                     std::size_t end, float a,
+                                                                     float b, float c, float t) {
+  unsigned count = 0;
+  for (std::size_t k = begin; k < end; ++k)
+    count += std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t;
+  return count;
+}
+
+/// The sums of eq. (2) over the points of the centred arrays within t of the plane, in one pass:
+/// 8 points per step in float, added to double every 256 points.
+struct InlierSums {
+  double n = 0, u = 0, v = 0, dk = 0, uu = 0, uv = 0, vv = 0, udk = 0, vdk = 0, dkdk = 0;
+};
+
+__attribute__((target_clones("avx2", "default"))) InlierSums sumInliers(const float* u,
+                                                                        const float* v,
+                                                                        const float* dk,
+                                                                        std::size_t size, float a,
+                                                                        float b, float c, float t) {
+  typedef float F8 __attribute__((vector_size(32)));
+  typedef std::int32_t I8 __attribute__((vector_size(32)));
+  constexpr std::size_t kLanes = 8, kFlush = 256;
+  InlierSums out;
+  const F8 one = {1, 1, 1, 1, 1, 1, 1, 1};
+  std::size_t k = 0;
+  for (; k + kLanes <= size;) {
+    F8 n = {}, su = {}, sv = {}, sd = {}, suu = {}, suv = {}, svv = {}, sud = {}, svd = {},
+       sdd = {};
+    for (const std::size_t stop = std::min(size, k + kFlush); k + kLanes <= stop; k += kLanes) {
+      F8 pu, pv, pd;
+      std::memcpy(&pu, u + k, sizeof pu);
+      std::memcpy(&pv, v + k, sizeof pv);
+      std::memcpy(&pd, dk + k, sizeof pd);
+      const F8 r = pd - (a * pu + b * pv + c);
+      const I8 in = (F8)((I8)r & 0x7fffffff) <= t;  // |r| <= t: all ones, else 0
+      const F8 wu = (F8)(in & (I8)pu), wv = (F8)(in & (I8)pv), wd = (F8)(in & (I8)pd);
+      n += (F8)(in & (I8)one);
+      su += wu;
+      sv += wv;
+      sd += wd;
+      suu += wu * pu;
+      suv += wu * pv;
+      svv += wv * pv;
+      sud += wu * pd;
+      svd += wv * pd;
+      sdd += wd * pd;
+    }
+    for (std::size_t l = 0; l < kLanes; ++l) {
+      out.n += n[l];
+      out.u += su[l];
+      out.v += sv[l];
+      out.dk += sd[l];
+      out.uu += suu[l];
+      out.uv += suv[l];
+      out.vv += svv[l];
+      out.udk += sud[l];
+      out.vdk += svd[l];
+      out.dkdk += sdd[l];
+    }
+  }
+  for (; k < size; ++k) {  // the last points, one by one
+    if (!(std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t)) continue;
+    const double pu = u[k], pv = v[k], pd = dk[k];
+    out.n += 1;
+    out.u += pu;
+    out.v += pv;
+    out.dk += pd;
+    out.uu += pu * pu;
+    out.uv += pu * pv;
+    out.vv += pv * pv;
+    out.udk += pu * pd;
+    out.vdk += pv * pd;
+    out.dkdk += pd * pd;
+  }
+  return out;
+}
+
 }  // namespace
 
 RDMapPlaneFit fitRDMapPlane(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& indices) {
@@ -111,20 +196,13 @@ RDMapPlaneFit SampleConsensusModelRDMapPlane::fitWithinDistance(
     }
     return sums.solve();
   }
-  // The sums of eq. (2) over the inliers as masked dot products of the centred arrays, which
-  // Eigen vectorizes (float partial sums; the centring keeps them accurate to ~1e-6).
-  const float c = centredC(model_coefficients);
-  const auto n = static_cast<Eigen::Index>(u_.size());
-  const Eigen::Map<const Eigen::VectorXf> u(u_.data(), n), v(v_.data(), n), dk(dk_.data(), n);
-  Eigen::VectorXf w(n);
-  for (Eigen::Index k = 0; k < n; ++k)
-    w[k] = std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t ? 1.0f : 0.0f;
-  const auto wu = w.cwiseProduct(u);
-  const auto wv = w.cwiseProduct(v);
-  const auto wd = w.cwiseProduct(dk);
+  // The sums of eq. (2) over the inliers of the centred arrays, in one vectorized pass (float
+  // partial sums; the centring keeps them accurate to ~1e-6).
+  const InlierSums in = sumInliers(u_.data(), v_.data(), dk_.data(), u_.size(), a, b,
+                                   centredC(model_coefficients), t);
   PlaneSums sums(mean_u_, mean_v_, mean_dk_);
-  sums.set(wu.dot(u), wu.dot(v), static_cast<double>(wu.sum()), wv.dot(v), wv.sum(), wu.dot(dk),
-           wv.dot(dk), wd.sum(), wd.dot(dk), static_cast<std::size_t>(w.sum()));
+  sums.set(in.uu, in.uv, in.u, in.vv, in.v, in.udk, in.vdk, in.dk, in.dkdk,
+           static_cast<std::size_t>(in.n));
   return sums.solve();
 }
 
@@ -171,16 +249,16 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints() {
   float* v = v_.data();
   float* dk = dk_.data();
   std::size_t kept = 0;
-  for (std::size_t k = 0, n = indices_->size(); k < n; ++k) {
+  for (std::size_t k = 0, n = size > 0 ? indices_->size() : 0; k < n; ++k) {
+    // Branch-free: every point is written at `kept`, which moves on only for a valid one.
     const pcl::index_t i = index[k];
-    if (i < 0 || static_cast<std::size_t>(i) >= size) continue;
-    const PointRDM& p = points[i];
-    if (!isValidRDMPoint(p)) continue;
+    const bool inside = i >= 0 && static_cast<std::size_t>(i) < size;
+    const PointRDM& p = points[inside ? i : 0];
     index[kept] = i;
     u[kept] = p.u;
     v[kept] = p.v;
     dk[kept] = p.dk;
-    ++kept;
+    kept += inside && isValidRDMPoint(p);
   }
   indices_->resize(kept);
   shuffled_indices_ = *indices_;
@@ -313,11 +391,7 @@ std::size_t SampleConsensusModelRDMapPlane::countWithinDistance(
     const float* u = u_.data();
     const float* v = v_.data();
     const float* dk = dk_.data();
-    const float cc = centredC(model_coefficients);
-    unsigned count = 0;
-    for (std::size_t k = 0, n = u_.size(); k < n; ++k)
-      count += std::abs(dk[k] - (a * u[k] + b * v[k] + cc)) <= t;
-    return count;
+    return countNear(u, v, dk, 0, u_.size(), a, b, centredC(model_coefficients), t);
   }
   std::size_t count = 0;
   for (const auto i : *indices_) count += std::abs(residual((*input_)[i], a, b, c)) <= t;
@@ -338,10 +412,7 @@ std::size_t SampleConsensusModelRDMapPlane::countWithinDistanceIfMore(
   std::size_t count = 0;
   for (std::size_t begin = 0; begin < n; begin += kBlock) {
     const std::size_t end = std::min(n, begin + kBlock);
-    unsigned in_block = 0;
-    for (std::size_t k = begin; k < end; ++k)
-      in_block += std::abs(dk[k] - (a * u[k] + b * v[k] + cc)) <= t;
-    count += in_block;
+    count += countNear(u, v, dk, begin, end, a, b, cc, t);
     if (count + (n - end) <= best) return count;  // cannot beat `best` any more
   }
   return count;

@@ -283,11 +283,10 @@ inline __attribute__((target("avx2"), always_inline)) __m256d logFour(__m256d v)
 }
 
 /// The profiles of four lanes around their maxima `top` (not saturated, both flanks inside the
-/// row): background, contrast, width and the sums of the Gaussian fit, as profilePass().
+/// row): background, contrast and width as profilePass(), the centre as gaussianCentre().
 struct FourProfiles {
-  alignas(32) double contrast[4], at_left[4], x_left[4], slope[4];
-  alignas(32) std::int64_t width[4], used[4];
-  alignas(32) double s[5][4], r[3][4];
+  alignas(32) double contrast[4], at_left[4], x_left[4], slope[4], centre[4];
+  alignas(32) std::int64_t width[4], fitted[4];  ///< fitted: all ones where the fit holds
 };
 
 template <typename T>
@@ -337,15 +336,31 @@ __attribute__((target("avx2"))) FourProfiles fourProfiles(const T* const rows[4]
     r1 += wl * d;
     r2 += wl * d2;
   }
+  // Caruana's fit in every lane, as gaussianCentre(): the normal equations by Cramer's rule.
+  const __m256d m00 = s0, m01 = s1, m02 = s2, m11 = s2, m12 = s3, m22 = s4;
+  const __m256d det =
+      m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
+  const __m256d b =
+      (m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02)) /
+      det;
+  const __m256d c =
+      (m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)) /
+      det;
+  const __m256d offset = -b / (2 * c);
+  const __m256d magnitude = _mm256_set1_pd(-0.0);  // |x|: x without its sign bit
+  __m256d fitted = _mm256_castsi256_pd(_mm256_cmpgt_epi64(used, _mm256_set1_epi64x(2)));
+  fitted = _mm256_and_pd(
+      fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, det), _mm256_set1_pd(1e-12), _CMP_NLT_UQ));
+  fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(c, _mm256_setzero_pd(), _CMP_LT_OQ));
+  fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, offset),
+                                               _mm256_set1_pd(2.0 * hw), _CMP_LE_OQ));
   _mm256_store_pd(out.contrast, contrast);
   _mm256_store_pd(out.at_left, at_left);
   _mm256_store_pd(out.x_left, x_left);
   _mm256_store_pd(out.slope, slope);
+  _mm256_store_pd(out.centre, x_top + offset);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.width), width);
-  _mm256_store_si256(reinterpret_cast<__m256i*>(out.used), used);
-  const __m256d sums[8] = {s0, s1, s2, s3, s4, r0, r1, r2};
-  for (int k = 0; k < 5; ++k) _mm256_store_pd(out.s[k], sums[k]);
-  for (int k = 0; k < 3; ++k) _mm256_store_pd(out.r[k], sums[5 + k]);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.fitted), _mm256_castpd_si256(fitted));
   return out;
 }
 
@@ -381,13 +396,10 @@ void measureFour(const PeakRegion<T>* regions, int count, int columns, const Pro
   for (int l = 0; l < lanes; ++l) {
     const auto width = static_cast<int>(f.width[l]);
     if (f.contrast[l] < p.min_contrast || width < p.min_width || width > p.max_width) continue;
-    ProfilePass pass{width,
-                     static_cast<int>(f.used[l]),
-                     {f.s[0][l], f.s[1][l], f.s[2][l], f.s[3][l], f.s[4][l]},
-                     {f.r[0][l], f.r[1][l], f.r[2][l]}};
     Peak& peak = peaks[slots[l]];
-    const int top = tops[l], lo = top - p.half_window, hi = top + p.half_window;
-    if (!gaussianCentre(pass, top, hi - lo, &peak.centre)) {
+    peak.centre = f.centre[l];
+    if (!f.fitted[l]) {  // as measurePeakAt(): the centroid when the fit does not hold
+      const int lo = tops[l] - p.half_window, hi = tops[l] + p.half_window;
       Background bg;
       bg.at_left = f.at_left[l];
       bg.x_left = f.x_left[l];
