@@ -6,7 +6,7 @@
 set -euo pipefail
 
 # ==== THE MAIN JOB: the one command `bash run.sh demo` runs (replace it, keep it one line) ====
-DEMO=(build/multislit simulate --scenario ball --frames 5 --out out/demo)
+DEMO=(build/multislit walk --out out/walk)
 
 PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev libaravis-dev
   libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format)

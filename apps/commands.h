@@ -4,6 +4,7 @@
 namespace multislit::apps {
 
 int runSimulate(int argc, char** argv);
+int runWalk(int argc, char** argv);
 int runEmulate(int argc, char** argv);
 int runCalibrate(int argc, char** argv);
 int runRdmap(int argc, char** argv);

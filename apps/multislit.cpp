@@ -15,6 +15,8 @@ struct Command {
 };
 
 const Command kCommands[] = {
+    {"walk", "the paper's walking experiment: a simulated HOAP-2 avoids a ball and a cable",
+     multislit::apps::runWalk},
     {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
      multislit::apps::runSimulate},
     {"emulate", "serve the simulator's images of a walk as a GigE Vision camera on 127.0.0.1",

@@ -1,0 +1,367 @@
+// multislit walk: the paper's walking experiment (Sec. V, Fig. 13-15) on the simulator. A HOAP-2
+// with the multi-slit sensor walks; a ping-pong ball is thrown in just in front of its foot, a LAN
+// cable lies across its path. Every frame: image -> RDMap -> floor -> obstacles -> map -> walker.
+#include "cli.h"
+#include "commands.h"
+#include "common.h"
+#include "plot.h"
+#include "walk_figures.h"
+
+#include "multislit/walk.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+namespace multislit::apps {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void declareOptions(cli::ArgParser& args) {
+  args.option("out", "out/walk", "output folder");
+  args.option("frames", "900", "frames to walk (30 Hz; the paper's run is about 900)");
+  args.option("seed", "1", "noise seed of the images (or of the synthesized RDMaps)");
+  args.option("ball-frame", "200", "frame the ping-pong ball lands in front of the foot");
+  args.option("step-length", "0.04", "the body's advance per step [m]");
+  args.option("step-frames", "24", "frames per step (24: 0.8 s, 50 mm/s with 40 mm steps)");
+  args.option("cluster", "grid", "obstacle grouping: grid (RDMap neighbours) or euclidean");
+  args.option("screw", "", "X,Y: add a screw head 6 mm across, 2 mm high, at world (X, Y) [m]");
+  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.flag("no-ball", "no ball is thrown in");
+  args.flag("no-cable", "no LAN cable on the floor");
+  args.flag("synthesize",
+            "RDMaps from the simulator's ground truth plus noise, not images "
+            "(about 50 times faster)");
+}
+
+WalkConfig configFromArgs(const cli::ArgParser& args) {
+  WalkConfig c;
+  if (args.has("sensor")) c.sensor = SensorConfig::load(args.str("sensor"));
+  c.reference_mount = c.sensor.mount;
+  c.render = !args.has("synthesize");
+  c.render_config.seed = static_cast<std::uint64_t>(args.integer("seed"));
+  c.synth.seed = c.render_config.seed;
+  c.scene.ball = !args.has("no-ball");
+  c.scene.cable = !args.has("no-cable");
+  c.scene.ball_frame = static_cast<int>(args.integer("ball-frame"));
+  c.scene.ball_roll_frame = c.scene.ball_frame + 60;
+  c.foot.step_length = args.number("step-length");
+  c.gait.step_frames = static_cast<int>(args.integer("step-frames"));
+  const std::string cluster = args.str("cluster");
+  if (cluster != "grid" && cluster != "euclidean")
+    throw cli::UsageError("--cluster must be grid or euclidean");
+  c.obstacles.method = cluster == "grid" ? ClusterMethod::Grid : ClusterMethod::Euclidean;
+  if (args.has("screw")) {
+    double x = 0, y = 0;
+    if (std::sscanf(args.str("screw").c_str(), "%lf,%lf", &x, &y) != 2)
+      throw cli::UsageError("--screw needs X,Y in metres");
+    c.scene.extra.push_back(SceneObject::cylinder("screw", Eigen::Vector3d(x, y, 0),
+                                                  Eigen::Vector3d(x, y, 0.002), 0.003));
+  }
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(e.what());
+  }
+  return c;
+}
+
+/// One object over the walk, against the ground truth.
+struct ObjectRecord {
+  SceneObject object;       ///< where it was first seen
+  int first_lit = -1;       ///< first frame the slits touch it at least 3.5 mm high
+  int first_detected = -1;  ///< first frame obstacle points lie on it
+  int last_detected = -1;
+  int first_mapped = -1;  ///< first frame the map holds an occupied voxel on it
+  std::size_t most_points = 0;
+  WalkFrame best;  ///< the frame with most obstacle points on it (for Fig. 14)
+};
+
+/// Everything the outputs need, gathered frame by frame.
+struct Recorder {
+  std::ofstream csv;
+  std::map<std::string, ObjectRecord> objects;
+  std::vector<std::string> events;
+  TopViewContent top;
+  std::vector<double> obstacle_points;  ///< per frame (Fig. 15)
+  Command motion = Command::Stop;
+  int motion_since = 0;
+  double measure_s = 0, process_s = 0;
+  int ball_cleared = -1;  ///< first frame the map is free where the ball landed, after it left
+  Eigen::Vector2d ball_spot = Eigen::Vector2d::Constant(NAN);
+};
+
+/// Whether the map holds an occupied voxel within 1 cm of the object, seen from above.
+bool mapped(const OccupancyMap& map, const SceneObject& o) {
+  Eigen::Vector2d lo, hi;
+  if (o.type == ShapeType::Cylinder) {
+    lo = o.axis_start.head<2>().cwiseMin(o.axis_end.head<2>());
+    hi = o.axis_start.head<2>().cwiseMax(o.axis_end.head<2>());
+  } else {
+    lo = hi = o.centre.head<2>();
+  }
+  const double reach = 0.01 + (o.type == ShapeType::Box ? 0.5 * o.size.head<2>().norm() : o.radius);
+  for (const MapCell& c : map.occupiedInBox(Eigen::Vector3d(lo.x() - reach, lo.y() - reach, -1),
+                                            Eigen::Vector3d(hi.x() + reach, hi.y() + reach, 1))) {
+    Footprint cell;
+    cell.centre = c.centre.head<2>();
+    cell.length = cell.width = c.size;
+    if (clearance(cell, o) <= 0.01) return true;
+  }
+  return false;
+}
+
+/// The true object that explains a place best (nearest seen from above).
+std::string objectAt(const std::vector<SceneObject>& objects, const Eigen::Vector2d& at) {
+  std::string name = "nothing";
+  double best = 0.05;
+  Footprint point;
+  point.centre = at;
+  for (const SceneObject& o : objects) {
+    const double d = clearance(point, o);
+    if (d < best) {
+      best = d;
+      name = o.name;
+    }
+  }
+  return name;
+}
+
+std::string describeMotion(const WalkFrame& f, const std::vector<SceneObject>& objects,
+                           int turn_direction, double stop_seconds) {
+  char s[256];
+  const WalkerResult& w = f.walker;
+  if (f.motion == Command::Walk) return "walks straight (the next footsteps are free)";
+  if (f.motion == Command::Turn) {
+    const std::string what = w.check.cells.empty()
+                                 ? "an obstacle"
+                                 : objectAt(objects, w.check.cells.front().centre.head<2>());
+    std::snprintf(s, sizeof s, "turns %s in place (footstep %d ahead touches the %s in the map)",
+                  turn_direction > 0 ? "left" : "right", w.check.first_blocked + 1, what.c_str());
+    return s;
+  }
+  if (w.reason == Reason::NoFloor) return "stops: no floor in the frame (fail safe)";
+  if (w.obstacle) {
+    const Eigen::Vector2d at = f.body.toWorld(w.obstacle->centroid.head<2>());
+    std::snprintf(s, sizeof s,
+                  "stops for %.0f s: the %s appeared suddenly %.0f mm in front of the feet (%zu "
+                  "points, %.0f mm high)",
+                  stop_seconds, objectAt(objects, at).c_str(), 1e3 * w.obstacle->distance,
+                  w.obstacle->pointCount(), 1e3 * w.obstacle->height);
+    return s;
+  }
+  return "stops";
+}
+
+void writeCsvHeader(std::ofstream& csv) {
+  csv << "frame,time_s,x_m,y_m,yaw_deg,decision,reason,motion,floor_found,valid_points,"
+         "floor_std_px,obstacle_points,obstacles,nearest_m,map_occupied,map_voxels,map_bytes,"
+         "ball_lit,ball_detected,cable_lit,cable_detected,footstep,footstep_clearance_m\n";
+}
+
+void writeCsvLine(std::ofstream& csv, const WalkFrame& f, const OccupancyMap& map, double fps) {
+  std::size_t lit[2] = {0, 0}, detected[2] = {0, 0};
+  for (const ObjectView& o : f.objects) {
+    const int k = o.object.name == "pingpong_ball" ? 0 : o.object.name == "lan_cable" ? 1 : -1;
+    if (k < 0) continue;
+    lit[k] = o.lit_any;
+    detected[k] = o.detected;
+  }
+  char s[512];
+  std::snprintf(
+      s, sizeof s, "%llu,%.3f,%.4f,%.4f,%.2f,%s,%s,%s,%d,%zu,%.4f,%zu,%zu,%.4f,%zu,%zu,%zu,",
+      static_cast<unsigned long long>(f.frame), static_cast<double>(f.frame) / fps, f.body.x,
+      f.body.y, f.body.yaw / kDeg, commandName(f.walker.command), reasonName(f.walker.reason),
+      commandName(f.motion), f.floor.found ? 1 : 0, f.floor.valid_points, f.floor.residual_std,
+      f.obstacles.pointCount(), f.obstacles.obstacles.size(),
+      f.obstacles.obstacles.empty() ? NAN : f.obstacles.obstacles[0].distance, map.occupiedCount(),
+      map.leafCount(), map.memoryUsage());
+  csv << s << lit[0] << ',' << detected[0] << ',' << lit[1] << ',' << detected[1] << ',';
+  if (f.footstep)
+    csv << footName(f.footstep->foot) << ',' << f.footstep_clearance << '\n';
+  else
+    csv << ",\n";
+}
+
+void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
+  const int k = static_cast<int>(f.frame);
+  writeCsvLine(r.csv, f, walk.map(), walk.config().gait.frame_rate);
+  r.obstacle_points.push_back(static_cast<double>(f.obstacles.pointCount()));
+  r.measure_s += f.measure_seconds;
+  r.process_s += f.process_seconds;
+  r.top.path.push_back(f.body);
+  if (f.footstep) {
+    r.top.footsteps.push_back(*f.footstep);
+    r.top.clearances.push_back(f.footstep_clearance);
+  }
+  for (const ObjectView& o : f.objects) {
+    ObjectRecord& rec = r.objects[o.object.name];
+    if (o.lit_any > 0 && rec.first_lit < 0) {
+      rec.first_lit = k;
+      rec.object = o.object;
+    }
+    if (rec.first_mapped < 0 && mapped(walk.map(), o.object)) rec.first_mapped = k;
+    if (o.detected == 0) continue;
+    if (rec.first_detected < 0) rec.first_detected = k;
+    rec.last_detected = k;
+    if (o.detected > rec.most_points) {
+      rec.most_points = o.detected;
+      rec.best = f;
+    }
+  }
+  if (f.motion != r.motion || k == 0) {
+    char head[64];
+    std::snprintf(head, sizeof head, "frame %4d (%5.1f s): ", k, k / walk.config().gait.frame_rate);
+    std::vector<SceneObject> objects;
+    for (const ObjectView& o : f.objects) objects.push_back(o.object);
+    const WalkConfig& c = walk.config();
+    r.events.push_back(head + describeMotion(f, objects, walk.gait().turnDirection(),
+                                             c.walker.stop_frames / c.gait.frame_rate));
+    r.motion = f.motion;
+  }
+}
+
+void trackBall(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
+  const WalkSceneConfig& s = walk.config().scene;
+  const int k = static_cast<int>(f.frame);
+  if (!s.ball || k < s.ball_frame) return;
+  if (k == s.ball_frame) r.ball_spot = f.body.toWorld(s.ball_landing);
+  if (r.ball_cleared >= 0 || k < s.ball_roll_frame) return;
+  const double m = 0.03;
+  if (walk.map()
+          .occupiedInBox(Eigen::Vector3d(r.ball_spot.x() - m, r.ball_spot.y() - m, -1),
+                         Eigen::Vector3d(r.ball_spot.x() + m, r.ball_spot.y() + m, 1))
+          .empty())
+    r.ball_cleared = k;
+}
+
+std::string summary(const Recorder& r, const WalkSimulation& walk, double seconds,
+                    const std::string& out) {
+  const WalkConfig& c = walk.config();
+  std::ostringstream o;
+  char s[512];
+  const int frames = static_cast<int>(walk.frame());
+  std::snprintf(s, sizeof s,
+                "multislit walk: the paper's walking experiment (Sec. V) on the simulator\n"
+                "  %d frames at %.0f Hz of %s (seed %llu)\n"
+                "  HOAP-2: soles %.0f x %.0f mm, feet %.0f mm apart, %.0f mm steps of %.2f s "
+                "(%.0f mm/s), turns %.0f deg per step\n",
+                frames, c.gait.frame_rate,
+                c.render ? "rendered images" : "RDMaps synthesized from the ground truth",
+                static_cast<unsigned long long>(c.render_config.seed), 1e3 * c.foot.foot_length,
+                1e3 * c.foot.foot_width, 1e3 * c.foot.foot_separation, 1e3 * c.foot.step_length,
+                c.gait.step_frames / c.gait.frame_rate, 1e3 * c.gait.speed(c.foot),
+                c.foot.turn_step);
+  o << s << "what appeared, and when it was detected (frame numbers; +n: frames later):\n";
+  const auto frameAfter = [](int frame, int since) {
+    if (frame < 0) return std::string("never");
+    return "at frame " + std::to_string(frame) + " (+" + std::to_string(frame - since) + ")";
+  };
+  for (const auto& [name, rec] : r.objects) {
+    if (rec.first_lit < 0) continue;
+    o << "  " << name << ": in sight of the slits from frame " << rec.first_lit
+      << "; obstacle points on it " << frameAfter(rec.first_detected, rec.first_lit)
+      << (rec.last_detected >= 0 ? " to frame " + std::to_string(rec.last_detected) : "")
+      << "; occupied in the map " << frameAfter(rec.first_mapped, rec.first_lit) << "\n";
+  }
+  if (r.ball_cleared >= 0)
+    o << "  the ball rolled away from frame " << c.scene.ball_roll_frame
+      << "; the map was free where it had landed at frame " << r.ball_cleared << "\n";
+  o << "what the robot did:\n";
+  for (const std::string& e : r.events) o << "  " << e << "\n";
+  int touched = 0;
+  double closest = INFINITY;
+  for (const double d : r.top.clearances) {
+    touched += d <= 0.0;
+    closest = std::min(closest, d);
+  }
+  const Pose2D& end = walk.gait().pose();
+  double walked = 0;
+  for (std::size_t k = 1; k < r.top.path.size(); ++k)
+    walked += (r.top.path[k].position() - r.top.path[k - 1].position()).norm();
+  std::snprintf(s, sizeof s,
+                "footsteps: %zu, touching an object: %d (closest %.1f mm)\n"
+                "path: %.2f m walked, ends at (%.2f, %.2f) m heading %.0f deg\n"
+                "map: %zu occupied voxels of %.0f mm, %zu voxels, %.0f kB (a window of +-%.1f m "
+                "around the robot)\n"
+                "time: %.0f s in all; per frame %.1f ms %s, %.2f ms floor + obstacles + map + "
+                "walker\n",
+                r.top.footsteps.size(), touched, 1e3 * closest, walked, end.x, end.y,
+                end.yaw / kDeg, walk.map().occupiedCount(), 1e3 * c.map.resolution,
+                walk.map().leafCount(), walk.map().memoryUsage() / 1e3, c.map.window_half_size,
+                seconds, 1e3 * r.measure_s / frames,
+                c.render ? "rendering and extracting" : "synthesizing", 1e3 * r.process_s / frames);
+  o << s << "outputs in " << out
+    << ": obstacles.csv, fig15_obstacle_points.png, rdmap_*.png (Fig. 14), map.bt, "
+       "map_top.png, summary.txt\n";
+  return o.str();
+}
+
+void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem::path& out) {
+  drawLinePlot((out / "fig15_obstacle_points.png").string(),
+               "Fig. 15: points detected as obstacles in each frame", "frame", "points",
+               {Series{"obstacle points", r.obstacle_points, 0xd03030}});
+  for (const auto& [name, rec] : r.objects) {
+    if (rec.most_points == 0) continue;
+    char title[160];
+    std::snprintf(title, sizeof title, "Fig. 14: RDMap of frame %llu, the floor plane and the %s",
+                  static_cast<unsigned long long>(rec.best.frame), name.c_str());
+    drawRDMapFigure((out / ("rdmap_" + name + ".png")).string(), title, rec.best);
+    char note[96];
+    std::snprintf(note, sizeof note, "%s (frames %d-%d)", name.c_str(), rec.first_detected,
+                  rec.last_detected);
+    r.top.objects.push_back(rec.object);
+    r.top.object_notes.push_back(note);
+  }
+  walk.map().save((out / "map.bt").string());
+  drawTopView((out / "map_top.png").string(), walk.map(), r.top);
+}
+
+}  // namespace
+
+int runWalk(int argc, char** argv) {
+  cli::ArgParser args(
+      "walk",
+      "The paper's walking experiment (Sec. V, Fig. 13-15) on the simulator: a HOAP-2 with the\n"
+      "multi-slit sensor walks; a 40 mm ping-pong ball is thrown in just in front of its foot\n"
+      "(it stops for 5 s), a 7 mm LAN cable lies across its path (it turns away). Each frame:\n"
+      "image -> RDMap -> floor (RANSAC) -> obstacles -> OctoMap -> footsteps -> walk/turn/stop.");
+  declareOptions(args);
+  if (!args.parse(argc, argv)) return 0;
+  const WalkConfig config = configFromArgs(args);
+  const long frames = args.integer("frames");
+  if (frames < 1) throw cli::UsageError("--frames must be >= 1");
+  const std::filesystem::path out = args.str("out");
+  std::filesystem::create_directories(out);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  WalkSimulation walk(config);
+  Recorder r;
+  r.csv.open(out / "obstacles.csv");
+  if (!r.csv) throw std::runtime_error("cannot write " + (out / "obstacles.csv").string());
+  writeCsvHeader(r.csv);
+  cli::Progress progress(static_cast<std::size_t>(frames), "walk");
+  for (long k = 0; k < frames; ++k) {
+    const WalkFrame f = walk.step();
+    record(r, f, walk);
+    trackBall(r, f, walk);
+    progress.update(static_cast<std::size_t>(k + 1));
+  }
+  progress.finish();
+  r.csv.close();
+  writeFigures(r, walk, out);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string text = summary(r, walk, seconds, out.string());
+  std::ofstream(out / "summary.txt") << text;
+  std::cout << text;
+  return 0;
+}
+
+}  // namespace multislit::apps

@@ -1,0 +1,32 @@
+// Figures of the walking experiment (multislit walk): an RDMap with its floor and obstacles as in
+// the paper's Fig. 14, and the occupancy map from above with the path and every footstep.
+#pragma once
+
+#include "multislit/footsteps.h"
+#include "multislit/occupancy_map.h"
+#include "multislit/scene.h"
+#include "multislit/walk.h"
+
+#include <string>
+#include <vector>
+
+namespace multislit::apps {
+
+/// Fig. 14: the RDMap of one frame in a 2.5D view (u across, v into the picture, dk up), the
+/// fitted floor plane light green, floor points green, obstacle points red.
+void drawRDMapFigure(const std::string& path, const std::string& title, const WalkFrame& frame);
+
+/// What the top view shows besides the map.
+struct TopViewContent {
+  std::vector<Pose2D> path;               ///< the body, every frame
+  std::vector<Footstep> footsteps;        ///< every footstep, in order
+  std::vector<double> clearances;         ///< of each footstep from the true objects [m]
+  std::vector<SceneObject> objects;       ///< true objects (outlines)
+  std::vector<std::string> object_notes;  ///< a label per object
+};
+
+/// The map seen from above: occupied voxels coloured by height, known-free floor grey, the true
+/// objects' outlines, the path and the soles (left blue, right orange, red if touching).
+void drawTopView(const std::string& path, const OccupancyMap& map, const TopViewContent& content);
+
+}  // namespace multislit::apps

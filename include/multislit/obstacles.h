@@ -1,0 +1,116 @@
+// Obstacles: the points off the floor of one RDMap (FloorResult::obstacles) grouped into objects,
+// each sized and placed in the robot frame. Two groupings: neighbours in the organized RDMap (along
+// a slit and across adjacent slits), or metric neighbours found with PCL's
+// EuclideanClusterExtraction on a FLANN k-d tree.
+#pragma once
+
+#include "multislit/floor_detector.h"
+#include "multislit/point_types.h"
+
+#include <pcl/point_cloud.h>
+#include <pcl/types.h>
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <vector>
+
+namespace multislit {
+
+enum class ClusterMethod {
+  Grid,      ///< neighbours in the organized RDMap: along a slit and across adjacent slits
+  Euclidean  ///< metric neighbours (pcl::EuclideanClusterExtraction, pcl::search::KdTree)
+};
+
+struct ObstacleClustererConfig {
+  ClusterMethod method = ClusterMethod::Grid;
+  /// Grid: two obstacle points of one slit are neighbours when at most this many cells (image
+  /// rows, 1.2 mm each on the floor) lie between them: points the extractor lost on an object's
+  /// texture or edge do not split it.
+  int max_gap = 10;  ///< [points]
+  /// Grid: points of adjacent slits are neighbours when their reference positions (u, v) are this
+  /// close in the image: about two slit spacings (43 px, f tan 2.3 deg, for the default sensor),
+  /// so that the pieces of an oblique cable on adjacent slits stay one obstacle.
+  double slit_link_radius = 90.0;  ///< [px]
+  /// Euclidean: largest gap inside one obstacle. The slits are 20 to 30 mm apart on the floor, so
+  /// an oblique cable is seen in pieces up to about 35 mm apart.
+  double tolerance = 0.04;  ///< [m]
+  /// Rejection rule: a group with fewer points is noise. A slit has one point per image row, so 3
+  /// points are 3 rows of one slit or parts of 2 or more slits; isolated noisy points (the 3 sigma
+  /// threshold lets 0.27% of a Gaussian floor through) almost never come in 3 connected ones. The
+  /// 7 mm LAN cable crosses each slit along dozens of rows, the 40 mm ball along a hundred.
+  int min_points = 3;  ///< [-]
+  /// The feet, seen from above in the robot frame: |x| <= feet_half_length, |y| <=
+  /// feet_half_width. Obstacle::distance is measured from this rectangle. Defaults: the HOAP-2
+  /// sole (95 x 65 mm), feet 78 mm apart, the leading foot half a 40 mm step ahead.
+  double feet_half_length = 0.0675;  ///< [m]
+  double feet_half_width = 0.0715;   ///< [m]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// One obstacle. Positions in the robot frame (x forward, y left, z up, origin on the floor midway
+/// between the feet) [m].
+struct Obstacle {
+  pcl::Indices indices;                                ///< its points (indices into the cloud)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mean of its points [m]
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();       ///< bounding box, robot frame [m]
+  Eigen::Vector3d max = Eigen::Vector3d::Zero();       ///< bounding box, robot frame [m]
+  double length = 0.0;                                 ///< size along the walking direction (x) [m]
+  double width = 0.0;         ///< size across the walking direction (y) [m]
+  double height = 0.0;        ///< highest point above the floor plane [m]
+  double distance = 0.0;      ///< nearest point to the feet rectangle, horizontally [m]
+  double max_residual = 0.0;  ///< largest |dk - plane| of its points [px]
+  int slits = 0;              ///< slits it lies on [-]
+  std::size_t pointCount() const { return indices.size(); }
+};
+
+/// The floor as a metric plane in the camera frame: n . p + d = height above the floor [m], n a
+/// unit normal pointing to the camera.
+struct MetricFloor {
+  bool valid = false;  ///< false: too few floor points with x, y, z (no metric scale)
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double offset = 0.0;
+  std::size_t points = 0;  ///< floor points fitted
+  double height(const Eigen::Vector3d& p_camera) const { return normal.dot(p_camera) + offset; }
+};
+
+struct ObstacleResult {
+  std::vector<Obstacle> obstacles;  ///< nearest to the feet first
+  MetricFloor floor;                ///< the plane heights are measured from
+  std::size_t rejected_groups = 0;  ///< groups below min_points (noise)
+  pcl::Indices rejected;            ///< their points
+  std::size_t pointCount() const;   ///< points in all obstacles
+};
+
+/// The floor of an RDMap in metric space: the least-squares plane through the x, y, z of the
+/// floor inliers (principal axes), its normal turned to the camera.
+MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& inliers);
+
+/// Groups the obstacle points of a FloorResult into obstacles. Thread-safe: keeps no state.
+class ObstacleClusterer {
+ public:
+  explicit ObstacleClusterer(const ObstacleClustererConfig& config = {});  ///< validates
+
+  const ObstacleClustererConfig& config() const { return config_; }
+
+  /// The obstacles of `cloud` (an organized RDMap with metric x, y, z) given its floor.
+  /// `robot_from_camera` places them in the robot frame (SensorGeometry::robotFromCamera of the
+  /// sensor's current mount); heights come from the metric floor plane, so a wrong mount height
+  /// or roll does not change them. Empty when the floor was not found.
+  ObstacleResult cluster(const pcl::PointCloud<PointRDM>::ConstPtr& cloud, const FloorResult& floor,
+                         const Eigen::Isometry3d& robot_from_camera) const;
+
+ private:
+  std::vector<pcl::Indices> gridGroups(const pcl::PointCloud<PointRDM>& cloud,
+                                       const pcl::Indices& points) const;
+  std::vector<pcl::Indices> euclideanGroups(const pcl::PointCloud<PointRDM>& cloud,
+                                            const pcl::Indices& points) const;
+  Obstacle describe(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                    const MetricFloor& metric, pcl::Indices indices,
+                    const Eigen::Isometry3d& robot_from_camera) const;
+
+  ObstacleClustererConfig config_;
+};
+
+}  // namespace multislit

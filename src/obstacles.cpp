@@ -1,0 +1,245 @@
+#include "multislit/obstacles.h"
+
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+namespace multislit {
+
+namespace {
+
+void require(bool ok, const std::string& field, const std::string& rule) {
+  if (!ok) throw std::invalid_argument("ObstacleClustererConfig." + field + " " + rule);
+}
+
+bool hasXYZ(const PointRDM& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
+
+/// Disjoint sets over 0 .. n-1 (union by size, path halving).
+class DisjointSets {
+ public:
+  explicit DisjointSets(std::size_t n) : parent_(n), size_(n, 1) {
+    std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+  }
+  std::size_t find(std::size_t i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  void join(std::size_t a, std::size_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return;
+    if (size_[a] < size_[b]) std::swap(a, b);
+    parent_[b] = a;
+    size_[a] += size_[b];
+  }
+
+ private:
+  std::vector<std::size_t> parent_, size_;
+};
+
+}  // namespace
+
+void ObstacleClustererConfig::validate() const {
+  require(max_gap >= 0, "max_gap", "must be >= 0 points");
+  require(slit_link_radius > 0, "slit_link_radius", "must be > 0 px");
+  require(tolerance > 0 && tolerance < 1, "tolerance", "must be in (0, 1) m");
+  require(min_points >= 1, "min_points", "must be >= 1");
+  require(feet_half_length >= 0, "feet_half_length", "must be >= 0 m");
+  require(feet_half_width >= 0, "feet_half_width", "must be >= 0 m");
+}
+
+std::size_t ObstacleResult::pointCount() const {
+  std::size_t n = 0;
+  for (const Obstacle& o : obstacles) n += o.pointCount();
+  return n;
+}
+
+MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& inliers) {
+  MetricFloor floor;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+  for (const auto i : inliers) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    if (!hasXYZ(p)) continue;
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    sum += q;
+    sum_sq += q * q.transpose();
+    ++floor.points;
+  }
+  if (floor.points < 3) return floor;
+  const double n = static_cast<double>(floor.points);
+  const Eigen::Vector3d mean = sum / n;
+  const Eigen::Matrix3d covariance = sum_sq / n - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  // The plane's normal is the axis of least spread; the two others must spread (not a line).
+  if (eigen.eigenvalues()(1) <= 1e-12) return floor;
+  floor.normal = eigen.eigenvectors().col(0).normalized();
+  floor.offset = -floor.normal.dot(mean);
+  if (floor.offset < 0) {  // the camera (the origin) is above the floor
+    floor.normal = -floor.normal;
+    floor.offset = -floor.offset;
+  }
+  floor.valid = true;
+  return floor;
+}
+
+ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config) : config_(config) {
+  config_.validate();
+}
+
+ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
+                                          const FloorResult& floor,
+                                          const Eigen::Isometry3d& robot_from_camera) const {
+  ObstacleResult result;
+  if (!cloud || !floor.found) return result;
+  // The floor in metric space, from which heights are measured.
+  result.floor = fitMetricFloor(*cloud, floor.inliers);
+  // Group the points off the floor.
+  const std::vector<pcl::Indices> groups = config_.method == ClusterMethod::Grid
+                                               ? gridGroups(*cloud, floor.obstacles)
+                                               : euclideanGroups(*cloud, floor.obstacles);
+  // Reject groups too small to be real, then size and place the others.
+  for (const pcl::Indices& group : groups) {
+    if (group.size() < static_cast<std::size_t>(config_.min_points)) {
+      ++result.rejected_groups;
+      result.rejected.insert(result.rejected.end(), group.begin(), group.end());
+      continue;
+    }
+    result.obstacles.push_back(describe(*cloud, floor, result.floor, group, robot_from_camera));
+  }
+  const auto distance = [](const Obstacle& o) {  // unplaced (NaN) last
+    return std::isnan(o.distance) ? std::numeric_limits<double>::infinity() : o.distance;
+  };
+  std::stable_sort(result.obstacles.begin(), result.obstacles.end(),
+                   [&](const Obstacle& a, const Obstacle& b) { return distance(a) < distance(b); });
+  return result;
+}
+
+std::vector<pcl::Indices> ObstacleClusterer::gridGroups(const pcl::PointCloud<PointRDM>& cloud,
+                                                        const pcl::Indices& points) const {
+  // Cloud row = slit, column = position along the slit (one image row each).
+  const std::size_t width = cloud.width;
+  std::vector<std::vector<std::size_t>> by_slit(cloud.height);
+  pcl::Indices sorted = points;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t j = 0; j < sorted.size(); ++j)
+    by_slit[static_cast<std::size_t>(sorted[j]) / width].push_back(j);
+  DisjointSets sets(sorted.size());
+  const double r2 = config_.slit_link_radius * config_.slit_link_radius;
+  for (std::size_t s = 0; s < by_slit.size(); ++s) {
+    const std::vector<std::size_t>& here = by_slit[s];
+    // Along the slit: at most max_gap cells between neighbours.
+    for (std::size_t a = 1; a < here.size(); ++a)
+      if (sorted[here[a]] - sorted[here[a - 1]] <= config_.max_gap + 1)
+        sets.join(here[a - 1], here[a]);
+    if (s + 1 >= by_slit.size()) continue;
+    // Across to the next slit: reference positions close in the image.
+    for (const std::size_t a : here) {
+      const PointRDM& p = cloud[static_cast<std::size_t>(sorted[a])];
+      for (const std::size_t b : by_slit[s + 1]) {
+        const PointRDM& q = cloud[static_cast<std::size_t>(sorted[b])];
+        const double du = p.u - q.u, dv = p.v - q.v;
+        if (du * du + dv * dv <= r2) sets.join(a, b);
+      }
+    }
+  }
+  std::vector<pcl::Indices> groups;
+  std::vector<std::size_t> group_of(sorted.size(), std::numeric_limits<std::size_t>::max());
+  for (std::size_t j = 0; j < sorted.size(); ++j) {
+    std::size_t& g = group_of[sets.find(j)];
+    if (g == std::numeric_limits<std::size_t>::max()) {
+      g = groups.size();
+      groups.emplace_back();
+    }
+    groups[g].push_back(sorted[j]);
+  }
+  return groups;
+}
+
+std::vector<pcl::Indices> ObstacleClusterer::euclideanGroups(const pcl::PointCloud<PointRDM>& cloud,
+                                                             const pcl::Indices& points) const {
+  // pcl::PointXYZ has PCL's precompiled instantiations (no PointRDM template code to build).
+  auto xyz = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  pcl::Indices source;
+  for (const auto i : points) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    if (!hasXYZ(p)) continue;
+    xyz->push_back(pcl::PointXYZ(p.x, p.y, p.z));
+    source.push_back(i);
+  }
+  if (xyz->empty()) return {};
+  auto tree = pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+  pcl::EuclideanClusterExtraction<pcl::PointXYZ> extraction;
+  extraction.setClusterTolerance(config_.tolerance);
+  extraction.setMinClusterSize(1);  // the rejection rule is ours, applied by cluster()
+  extraction.setMaxClusterSize(std::numeric_limits<pcl::uindex_t>::max());
+  extraction.setSearchMethod(tree);
+  extraction.setInputCloud(xyz);
+  std::vector<pcl::PointIndices> found;
+  extraction.extract(found);
+  std::vector<pcl::Indices> groups;
+  for (const pcl::PointIndices& c : found) {
+    groups.emplace_back();
+    for (const auto j : c.indices) groups.back().push_back(source[static_cast<std::size_t>(j)]);
+  }
+  return groups;
+}
+
+Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
+                                     const FloorResult& floor, const MetricFloor& metric,
+                                     pcl::Indices indices,
+                                     const Eigen::Isometry3d& robot_from_camera) const {
+  Obstacle o;
+  const double inf = std::numeric_limits<double>::infinity();
+  o.min.setConstant(inf);
+  o.max.setConstant(-inf);
+  o.distance = inf;
+  std::vector<double> heights;
+  std::set<int> slits;
+  for (const auto i : indices) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    slits.insert(p.slit);
+    const double residual = p.dk - (floor.plane[0] * p.u + floor.plane[1] * p.v + floor.plane[2]);
+    o.max_residual = std::max(o.max_residual, std::abs(residual));
+    if (!hasXYZ(p)) continue;
+    const Eigen::Vector3d camera(p.x, p.y, p.z);
+    const Eigen::Vector3d robot = robot_from_camera * camera;
+    o.centroid += robot;
+    o.min = o.min.cwiseMin(robot);
+    o.max = o.max.cwiseMax(robot);
+    heights.push_back(metric.valid ? metric.height(camera) : robot.z());
+    const double dx = std::max(0.0, std::abs(robot.x()) - config_.feet_half_length);
+    const double dy = std::max(0.0, std::abs(robot.y()) - config_.feet_half_width);
+    o.distance = std::min(o.distance, std::hypot(dx, dy));
+  }
+  o.slits = static_cast<int>(slits.size());
+  if (!heights.empty()) {
+    o.centroid /= static_cast<double>(heights.size());
+    o.length = o.max.x() - o.min.x();
+    o.width = o.max.y() - o.min.y();
+    const auto top = heights.begin() + static_cast<std::ptrdiff_t>(0.9 * (heights.size() - 1));
+    std::nth_element(heights.begin(), top, heights.end());
+    o.height = *top;
+  } else {  // no metric position (a reference without scale): sizes unknown
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    o.centroid.setConstant(nan);
+    o.min = o.max = o.centroid;
+    o.length = o.width = o.height = o.distance = nan;
+  }
+  o.indices = std::move(indices);
+  return o;
+}
+
+}  // namespace multislit

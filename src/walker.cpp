@@ -1,0 +1,131 @@
+#include "multislit/walker.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace multislit {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+void require(bool ok, const std::string& field, const std::string& rule) {
+  if (!ok) throw std::invalid_argument("WalkerConfig." + field + " " + rule);
+}
+
+}  // namespace
+
+const char* reasonName(Reason reason) {
+  switch (reason) {
+    case Reason::PathClear:
+      return "path clear";
+    case Reason::PathBlocked:
+      return "path blocked";
+    case Reason::SuddenObstacle:
+      return "sudden obstacle";
+    case Reason::NoFloor:
+      return "no floor";
+  }
+  return "?";
+}
+
+void WalkerConfig::validate() const {
+  require(lookahead_steps >= 1, "lookahead_steps", "must be >= 1");
+  require(turn_lookahead_steps >= 1, "turn_lookahead_steps", "must be >= 1");
+  require(margin >= 0, "margin", "must be >= 0 m");
+  require(max_height > min_height, "max_height", "must be > min_height");
+  require(stop_frames >= 1, "stop_frames", "must be >= 1");
+  require(near_distance >= 0, "near_distance", "must be >= 0 m");
+  require(known_margin >= 0, "known_margin", "must be >= 0 m");
+  require(max_turn > 0 && max_turn <= 180, "max_turn", "must be in (0, 180] deg");
+}
+
+Walker::Walker(const WalkerConfig& config, const FootConfig& foot) : config_(config), foot_(foot) {
+  config_.validate();
+  foot_.validate();
+}
+
+std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
+                                           const Pose2D& body) const {
+  const double corridor = 0.5 * foot_.foot_separation + 0.5 * foot_.foot_width + config_.margin;
+  for (const Obstacle& o : obstacles.obstacles) {  // nearest first
+    if (!(o.distance <= config_.near_distance)) break;
+    if (o.max.y() < -corridor || o.min.y() > corridor || o.max.x() < 0) continue;
+    // Unknown to the map: no occupied voxel around its bounding box before this frame.
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+    Eigen::Vector2d hi = -lo;
+    for (const double x : {o.min.x(), o.max.x()})
+      for (const double y : {o.min.y(), o.max.y()}) {
+        const Eigen::Vector2d w = body.toWorld(Eigen::Vector2d(x, y));
+        lo = lo.cwiseMin(w);
+        hi = hi.cwiseMax(w);
+      }
+    const double m = config_.known_margin;
+    if (map.occupiedInBox(Eigen::Vector3d(lo.x() - m, lo.y() - m, -1.0),
+                          Eigen::Vector3d(hi.x() + m, hi.y() + m, 1.0))
+            .empty())
+      return o;
+  }
+  return std::nullopt;
+}
+
+WalkerResult Walker::step(const OccupancyMap& map, const Pose2D& body, Foot next_foot,
+                          const WalkerObservation& seen) {
+  WalkerResult r;
+  // Fail safe: no floor, no step.
+  if (!seen.floor_found) {
+    r.reason = Reason::NoFloor;
+    return r;
+  }
+  // An obstacle appeared very near: stop for stop_frames (Sec. V), then look again.
+  if (stop_left_ == 0 && seen.sudden) {
+    stop_left_ = config_.stop_frames;
+    r.obstacle = seen.sudden;
+  }
+  if (stop_left_ > 0) {
+    r.reason = Reason::SuddenObstacle;
+    r.stop_frames_left = --stop_left_;
+    turning_ = 0;
+    return r;
+  }
+  // Walk while the next footsteps are free; else turn, keeping the side until they are.
+  r.check = checkAhead(map, body, next_foot, config_.lookahead_steps, &r.planned);
+  if (r.check.free) {
+    turning_ = 0;
+    r.command = Command::Walk;
+    r.reason = Reason::PathClear;
+    return r;
+  }
+  if (turning_ == 0) turning_ = chooseTurn(map, body, next_foot);
+  r.command = Command::Turn;
+  r.reason = Reason::PathBlocked;
+  r.turn_direction = turning_;
+  return r;
+}
+
+FootstepCheck Walker::checkAhead(const OccupancyMap& map, const Pose2D& body, Foot next_foot,
+                                 int steps_ahead, std::vector<Footstep>* planned) const {
+  std::vector<Footstep> steps = planStraight(body, next_foot, steps_ahead, foot_);
+  FootstepCheck check =
+      checkFootsteps(steps, map, config_.margin, config_.min_height, config_.max_height);
+  if (planned) *planned = std::move(steps);
+  return check;
+}
+
+int Walker::chooseTurn(const OccupancyMap& map, const Pose2D& body, Foot next_foot) const {
+  // The side whose smallest turn frees the footsteps over the whole view; the preferred side on a
+  // tie or when neither does within max_turn.
+  const int first = config_.prefer_left ? 1 : -1;
+  const int turns = static_cast<int>(std::floor(config_.max_turn / foot_.turn_step));
+  for (int k = 1; k <= turns; ++k)
+    for (const int side : {first, -first})
+      if (checkAhead(map, body.turned(side * k * foot_.turn_step * kDeg), next_foot,
+                     config_.turn_lookahead_steps)
+              .free)
+        return side;
+  return first;
+}
+
+}  // namespace multislit

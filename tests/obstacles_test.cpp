@@ -1,0 +1,192 @@
+// Obstacle clusters: points off the floor grouped, sized and placed, against the simulator's truth.
+#include "multislit/obstacles.h"
+#include "multislit/extractor.h"
+#include "multislit/floor_detector.h"
+#include "multislit/rdmap_synth.h"
+#include "multislit/scenarios.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+using namespace multislit;
+
+namespace {
+
+const Reference& reference() {
+  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
+  return ref;
+}
+
+const RDMapSynthesizer& synth() {
+  static const RDMapSynthesizer s(SensorConfig{}, reference());
+  return s;
+}
+
+const SensorGeometry& geometry() { return synth().simulator().geometry(); }
+
+struct Seen {
+  pcl::PointCloud<PointRDM>::Ptr cloud;
+  FloorResult floor;
+  ObstacleResult obstacles;
+};
+
+/// The robot at the origin of the world, the sensor at the reference mount.
+Seen look(const Scene& scene, ClusterMethod method, bool render = false) {
+  const MountConfig mount;
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(mount);
+  Seen s;
+  if (render) {
+    static const Simulator simulator{SensorConfig{}};
+    static const Extractor extractor(reference());
+    s.cloud = extractor.extract(simulator.render(scene, pose, 11).image, 0, 11);
+  } else {
+    s.cloud = synth().synthesize(scene, pose, 11);
+  }
+  s.floor = FloorDetector().detect(s.cloud);
+  ObstacleClustererConfig config;
+  config.method = method;
+  s.obstacles = ObstacleClusterer(config).cluster(s.cloud, s.floor, pose);
+  return s;
+}
+
+Scene ballScene() { return makeScenario("ball").scene; }  // 40 mm ball at (0.18, 0.02)
+
+Scene cableScene(double x, double yaw_deg = 0.0) {  // 7 mm cable across the view, x ahead
+  Scene scene;
+  const double r = 0.0035, half = 0.6, c = std::cos(yaw_deg * M_PI / 180),
+               s = std::sin(yaw_deg * M_PI / 180);
+  scene.objects.push_back(SceneObject::cylinder("cable",
+                                                Eigen::Vector3d(x + half * s, -half * c, r),
+                                                Eigen::Vector3d(x - half * s, half * c, r), r));
+  scene.objects.back().albedo = 0.35;
+  return scene;
+}
+
+/// `slack` widens the size tolerances for rendered frames, whose extraction has outliers at
+/// the objects' edges.
+void expectBall(const ObstacleResult& r, const std::string& what, double slack = 0.0) {
+  ASSERT_EQ(r.obstacles.size(), 1u) << what;
+  const Obstacle& o = r.obstacles[0];
+  EXPECT_GE(o.pointCount(), 20u) << what;
+  EXPECT_NEAR(o.height, 0.040, 0.006 + slack) << what;  // the ball's top
+  EXPECT_GT(o.width, 0.025) << what;
+  EXPECT_LT(o.width, 0.045 + slack) << what;
+  EXPECT_LT(o.length, 0.045 + slack) << what;
+  // The slits see the side facing the sensor: the centroid lies within the ball's radius.
+  EXPECT_LT((o.centroid.head<2>() - Eigen::Vector2d(0.18, 0.02)).norm(), 0.02) << what;
+  EXPECT_GE(o.slits, 2) << what;
+  // Nearest point about 0.16 m ahead; the feet end 0.0675 m ahead.
+  EXPECT_NEAR(o.distance, o.min.x() - 0.0675, 1e-9) << what;
+  EXPECT_NEAR(o.distance, 0.16 - 0.0675, 0.015) << what;
+}
+
+void expectCable(const ObstacleResult& r, double x, const std::string& what, double slack = 0.0) {
+  ASSERT_EQ(r.obstacles.size(), 1u) << what;
+  const Obstacle& o = r.obstacles[0];
+  EXPECT_GE(o.pointCount(), 100u) << what;  // one slit along many rows
+  EXPECT_NEAR(o.height, 0.007, 0.002 + slack) << what;
+  EXPECT_GT(o.width, 0.30) << what;  // across the whole view
+  EXPECT_LT(o.length, 0.03) << what;
+  EXPECT_NEAR(o.centroid.x(), x, 0.01) << what;
+}
+
+}  // namespace
+
+TEST(ObstacleClusterer, BallIsOneObstacleSizedAndPlaced) {
+  expectBall(look(ballScene(), ClusterMethod::Grid).obstacles, "grid");
+  expectBall(look(ballScene(), ClusterMethod::Euclidean).obstacles, "euclidean");
+}
+
+TEST(ObstacleClusterer, LanCableIsKeptAndSized) {
+  const Seen grid = look(cableScene(0.25), ClusterMethod::Grid);
+  expectCable(grid.obstacles, 0.25, "grid");
+  EXPECT_EQ(grid.obstacles.obstacles.size(), 1u);
+  const Seen euclid = look(cableScene(0.25), ClusterMethod::Euclidean);
+  expectCable(euclid.obstacles, 0.25, "euclidean");
+  EXPECT_EQ(euclid.obstacles.pointCount(), grid.obstacles.pointCount());
+}
+
+TEST(ObstacleClusterer, RenderedFramesGiveTheSameObstacles) {
+  expectBall(look(ballScene(), ClusterMethod::Grid, true).obstacles, "rendered ball", 0.005);
+  const Seen cable = look(cableScene(0.25), ClusterMethod::Grid, true);
+  expectCable(cable.obstacles, 0.25, "rendered cable", 0.002);
+  std::printf("rendered cable: %zu obstacles, %zu points, %.1f mm high, %.0f mm across\n",
+              cable.obstacles.obstacles.size(), cable.obstacles.pointCount(),
+              1e3 * cable.obstacles.obstacles[0].height, 1e3 * cable.obstacles.obstacles[0].width);
+}
+
+TEST(ObstacleClusterer, ObliqueCableStaysInFewPieces) {
+  // Each slit sees a piece of an oblique cable; at 30 deg and more the pieces are close enough
+  // to stay one or two obstacles (at 15 deg they are 50 mm apart: five obstacles).
+  for (const double yaw : {30.0, 45.0, 60.0}) {
+    const Seen euclid = look(cableScene(0.25, yaw), ClusterMethod::Euclidean);
+    const Seen grid = look(cableScene(0.25, yaw), ClusterMethod::Grid);
+    EXPECT_LE(euclid.obstacles.obstacles.size(), 2u) << yaw << " deg";
+    EXPECT_LE(grid.obstacles.obstacles.size(), 2u) << yaw << " deg";
+    EXPECT_EQ(grid.obstacles.pointCount(), euclid.obstacles.pointCount()) << yaw << " deg";
+  }
+}
+
+TEST(ObstacleClusterer, IsolatedPointsAreRejectedThreeInARowAreKept) {
+  Seen s = look(Scene{}, ClusterMethod::Grid);
+  ASSERT_TRUE(s.floor.found);
+  ASSERT_TRUE(s.obstacles.obstacles.empty());
+  // Spikes of +3 px: ten single points and one pair, far apart, then three in a row.
+  const int w = static_cast<int>(s.cloud->width);
+  const auto spike = [&](int slit, int column) {
+    PointRDM& p = s.cloud->at(column, slit);
+    ASSERT_TRUE(std::isfinite(p.dk)) << slit << " " << column;
+    p.dk += 3.0f;
+  };
+  for (int k = 0; k < 10; ++k) spike(1 + (k % 5) * 3, w / 4 + (k / 5) * (w / 3));
+  spike(7, w / 2);
+  spike(7, w / 2 + 1);
+  s.floor = FloorDetector().detect(s.cloud);
+  const ObstacleClusterer clusterer;
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(MountConfig{});
+  ObstacleResult r = clusterer.cluster(s.cloud, s.floor, pose);
+  EXPECT_TRUE(r.obstacles.empty());
+  EXPECT_EQ(r.rejected_groups, 11u);
+  EXPECT_EQ(r.rejected.size(), 12u);
+  spike(7, w / 2 + 3);  // one cell gap: within max_gap
+  s.floor = FloorDetector().detect(s.cloud);
+  r = clusterer.cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 3u);
+}
+
+TEST(ObstacleClusterer, MetricFloorIsTheFloorUnderTheSensor) {
+  const Seen s = look(Scene{}, ClusterMethod::Grid);
+  ASSERT_TRUE(s.obstacles.floor.valid);
+  // The camera is 445 mm above the floor; the normal is the robot's z axis.
+  EXPECT_NEAR(s.obstacles.floor.offset, 0.445, 0.002);
+  const Eigen::Vector3d up =
+      geometry().robotFromCamera(MountConfig{}).linear() * s.obstacles.floor.normal;
+  EXPECT_GT(up.z(), std::cos(0.5 * M_PI / 180));
+  EXPECT_GT(s.obstacles.floor.points, 4000u);
+}
+
+TEST(ObstacleClusterer, NoFloorNoObstacles) {
+  Seen s = look(ballScene(), ClusterMethod::Grid);
+  s.floor.found = false;
+  EXPECT_TRUE(ObstacleClusterer()
+                  .cluster(s.cloud, s.floor, Eigen::Isometry3d::Identity())
+                  .obstacles.empty());
+}
+
+TEST(ObstacleClusterer, ConfigErrorsNameTheField) {
+  ObstacleClustererConfig config;
+  config.min_points = 0;
+  try {
+    config.validate();
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("min_points"), std::string::npos);
+  }
+  config = {};
+  config.tolerance = 0;
+  EXPECT_THROW(ObstacleClusterer{config}, std::invalid_argument);
+}

@@ -1,0 +1,224 @@
+// The occupancy map: evidence over frames (a screw too small for one frame), free space clearing a
+// ball that rolled away, no cells from noise, .bt files, bounded memory, footprint queries.
+#include "multislit/occupancy_map.h"
+#include "multislit/walk.h"
+
+#include <octomap/OcTree.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+using namespace multislit;
+
+namespace {
+
+const Reference& reference() {
+  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
+  return ref;
+}
+
+/// The walk on synthesized RDMaps (Simulator::groundTruth plus the extractor's noise).
+WalkConfig walkConfig(bool ball, bool cable) {
+  WalkConfig config;
+  config.render = false;
+  config.scene.ball = ball;
+  config.scene.cable = cable;
+  return config;
+}
+
+/// Occupied voxels within `radius` of (x, y) seen from above.
+std::size_t occupiedNear(const OccupancyMap& map, double x, double y, double radius) {
+  return map
+      .occupiedInBox(Eigen::Vector3d(x - radius, y - radius, -1.0),
+                     Eigen::Vector3d(x + radius, y + radius, 1.0))
+      .size();
+}
+
+using KeySet = std::set<std::tuple<unsigned, unsigned, unsigned>>;
+
+/// The occupied voxels of a tree at its finest level.
+KeySet occupiedKeys(const octomap::OcTree& tree) {
+  KeySet keys;
+  const unsigned depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const octomap::OcTreeKey base = it.getIndexKey();
+    const unsigned n = 1u << (depth - it.getDepth());
+    for (unsigned i = 0; i < n * n * n; ++i)
+      keys.emplace(base[0] + i % n, base[1] + i / n % n, base[2] + i / (n * n));
+  }
+  return keys;
+}
+
+}  // namespace
+
+TEST(OccupancyMap, ScrewTooSmallForAnyFrameIsFoundFromSequentialData) {
+  // A screw head 6 mm across and 2 mm high gives about 0.5 px: below the 0.9 px threshold of
+  // every frame, while the extractor's noise is 0.12 px. Three places: inside one voxel, across
+  // two, across four.
+  for (const Eigen::Vector2d& at : {Eigen::Vector2d(0.655, -0.027), Eigen::Vector2d(0.600, 0.013),
+                                    Eigen::Vector2d(0.700, 0.000)}) {
+    WalkConfig config = walkConfig(false, false);
+    config.scene.extra.push_back(SceneObject::cylinder("screw", Eigen::Vector3d(at.x(), at.y(), 0),
+                                                       Eigen::Vector3d(at.x(), at.y(), 0.002),
+                                                       0.003));
+    WalkSimulation walk(config, reference());
+    int first_lit = -1, found = -1, detected = 0;
+    for (int k = 0; k < 320 && found < 0; ++k) {
+      const WalkFrame f = walk.step();
+      const ObjectView& screw = f.objects.at(0);
+      if (screw.lit_any > 0 && first_lit < 0) first_lit = k;
+      detected += screw.detected > 0;
+      if (occupiedNear(walk.map(), at.x(), at.y(), 0.01) > 0) found = k;
+    }
+    EXPECT_EQ(detected, 0) << "a single frame detected the screw at " << at.transpose();
+    ASSERT_GE(first_lit, 0);
+    EXPECT_GE(found, first_lit) << "the screw at " << at.transpose() << " is not in the map";
+    std::printf("screw at (%.3f, %.3f): first lit at frame %d, in the map at frame %d\n", at.x(),
+                at.y(), first_lit, found);
+  }
+}
+
+TEST(OccupancyMap, NoiseMakesNoOccupiedVoxels) {
+  WalkSimulation walk(walkConfig(false, false), reference());
+  std::size_t most = 0;
+  for (int k = 0; k < 600; ++k) {
+    walk.step();
+    if (k % 10 == 0) most = std::max(most, walk.map().occupiedCount());
+  }
+  EXPECT_EQ(most, 0u);
+}
+
+TEST(OccupancyMap, BallThatRolledAwayIsClearedAndTheMapReloadsFromBt) {
+  WalkSimulation walk(walkConfig(true, false), reference());
+  const WalkSceneConfig& scene = walk.config().scene;
+  Eigen::Vector2d landed = Eigen::Vector2d::Zero();
+  std::size_t while_there = 0;
+  const std::string path = ::testing::TempDir() + "occupancy_map_test.bt";
+  for (int k = 0; k <= scene.ball_roll_frame + 80; ++k) {
+    const WalkFrame f = walk.step();
+    if (k == scene.ball_frame) landed = f.body.toWorld(scene.ball_landing);
+    if (k != scene.ball_roll_frame - 1) continue;
+    while_there = occupiedNear(walk.map(), landed.x(), landed.y(), 0.03);
+    walk.map().save(path);  // a map with the ball in it
+    octomap::OcTree loaded(0.1);
+    ASSERT_TRUE(loaded.readBinary(path));
+    EXPECT_DOUBLE_EQ(loaded.getResolution(), walk.map().config().resolution);
+    const KeySet saved = occupiedKeys(walk.map().tree());
+    EXPECT_FALSE(saved.empty());
+    EXPECT_EQ(occupiedKeys(loaded), saved);
+  }
+  EXPECT_GE(while_there, 5u);
+  // 80 frames after it started rolling away (2.7 s), the floor seen there has cleared it.
+  EXPECT_EQ(occupiedNear(walk.map(), landed.x(), landed.y(), 0.05), 0u);
+  EXPECT_EQ(walk.map().occupiedCount(), 0u);
+  std::remove(path.c_str());
+}
+
+TEST(OccupancyMap, MemoryStaysBoundedOver10000Frames) {
+  // One frame of the bare floor inserted along a circle of 5 m radius at 5 mm per frame: 50 m.
+  // Three of the fifteen slits (0, 7, 14) are kept: as they sweep the floor they touch the same
+  // voxels as all fifteen, at a fifth of the cost.
+  const RDMapSynthesizer synth(SensorConfig{}, reference());
+  const SensorGeometry& geometry = synth.simulator().geometry();
+  const Eigen::Isometry3d robot_from_camera = geometry.robotFromCamera(MountConfig{});
+  const auto cloud = synth.synthesize(Scene{}, robot_from_camera, 1);
+  for (PointRDM& p : *cloud)
+    if (p.slit % 7 != 0) p.dk = std::numeric_limits<float>::quiet_NaN();
+  const FloorResult floor = FloorDetector().detect(cloud);
+  const ObstacleResult obstacles = ObstacleClusterer().cluster(cloud, floor, robot_from_camera);
+  ASSERT_TRUE(floor.found);
+  OccupancyMap map;
+  std::size_t most = 0, at_1000 = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < 10000; ++k) {
+    const double angle = 0.005 * k / 5.0;
+    const Pose2D body{5.0 * std::sin(angle), 5.0 * (1 - std::cos(angle)), angle};
+    map.insertFrame(*cloud, floor, obstacles, body.isometry() * robot_from_camera,
+                    geometry.projectorCentre());
+    most = std::max(most, map.memoryUsage());
+    if (k == 1000) at_1000 = map.memoryUsage();
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(most, 2u << 20);  // 2 MB
+  EXPECT_LT(map.memoryUsage(), 3 * at_1000 / 2);
+  std::printf(
+      "map memory over 10000 frames: at most %zu bytes, %zu at frame 1000, %zu at the end "
+      "(%zu voxels); %.0f frames per second\n",
+      most, at_1000, map.memoryUsage(), map.leafCount(), 10000 / seconds);
+}
+
+TEST(OccupancyMap, UpdateRateOfFullFrames) {
+  const RDMapSynthesizer synth(SensorConfig{}, reference());
+  const SensorGeometry& geometry = synth.simulator().geometry();
+  const Eigen::Isometry3d robot_from_camera = geometry.robotFromCamera(MountConfig{});
+  const auto cloud = synth.synthesize(Scene{}, robot_from_camera, 2);
+  const FloorResult floor = FloorDetector().detect(cloud);
+  const ObstacleResult obstacles = ObstacleClusterer().cluster(cloud, floor, robot_from_camera);
+  OccupancyMap map;
+  const auto t0 = std::chrono::steady_clock::now();
+  MapUpdateStats stats;
+  for (int k = 0; k < 300; ++k)
+    stats = map.insertFrame(*cloud, floor, obstacles,
+                            Pose2D{0.00167 * k, 0, 0}.isometry() * robot_from_camera,
+                            geometry.projectorCentre());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_TRUE(stats.inserted);
+  EXPECT_GT(stats.free_voxels, 500u);
+  std::printf("%zu points per frame: %.0f map updates per second (%zu voxels updated per frame)\n",
+              floor.valid_points, 300 / seconds, stats.free_voxels);
+}
+
+TEST(OccupancyMap, FootprintQueryFindsTheCellsUnderASole) {
+  // The ball 0.18 m ahead, seen from the reference pose.
+  const RDMapSynthesizer synth(SensorConfig{}, reference());
+  const Eigen::Isometry3d robot_from_camera =
+      synth.simulator().geometry().robotFromCamera(MountConfig{});
+  Scene scene;
+  scene.objects.push_back(SceneObject::sphere("ball", Eigen::Vector3d(0.18, 0.02, 0.02), 0.02));
+  const auto cloud = synth.synthesize(scene, robot_from_camera, 3);
+  const FloorResult floor = FloorDetector().detect(cloud);
+  const ObstacleResult obstacles = ObstacleClusterer().cluster(cloud, floor, robot_from_camera);
+  OccupancyMap map;
+  map.insertFrame(*cloud, floor, obstacles, robot_from_camera,
+                  synth.simulator().geometry().projectorCentre());
+  Footprint sole;
+  sole.length = 0.095;
+  sole.width = 0.065;
+  sole.centre = Eigen::Vector2d(0.18, 0.02);
+  const std::vector<MapCell> under = map.occupiedUnder(sole, 0.0, 0.25);
+  EXPECT_GE(under.size(), 5u);
+  for (const MapCell& c : under) {
+    EXPECT_TRUE(sole.inflated(0.5 * c.size * std::sqrt(2.0)).contains(c.centre.head<2>()));
+    EXPECT_GT(c.probability, map.config().occupancy_threshold);
+  }
+  EXPECT_TRUE(map.occupiedUnder(sole, 0.05, 0.25).empty());  // nothing above the ball
+  sole.centre = Eigen::Vector2d(0.18, 0.085);                // beside it, 12 mm away
+  EXPECT_TRUE(map.occupiedUnder(sole, 0.0, 0.25).empty());
+  sole.yaw = M_PI / 2;  // turned: now 95 mm across, over the ball
+  EXPECT_FALSE(map.occupiedUnder(sole, 0.0, 0.25).empty());
+  EXPECT_THROW(map.save("/nonexistent/dir/map.bt"), std::runtime_error);
+}
+
+TEST(OccupancyMap, ConfigErrorsNameTheField) {
+  OccupancyMapConfig config;
+  config.prob_miss = 0.6;
+  try {
+    config.validate();
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("prob_miss"), std::string::npos);
+  }
+  config = {};
+  config.free_height = 0.001;
+  EXPECT_THROW(OccupancyMap{config}, std::invalid_argument);
+}
