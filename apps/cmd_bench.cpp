@@ -6,6 +6,8 @@
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
+#include "multislit/obstacles.h"
+#include "multislit/occupancy_map.h"
 #include "multislit/scenarios.h"
 #include "multislit/simulator.h"
 
@@ -48,6 +50,7 @@ struct BenchInput {
   std::vector<cv::Mat> images;
   std::vector<Eigen::Isometry3d> world_from_camera;  ///< per frame: odometry and mount
   Eigen::Isometry3d robot_from_camera = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d light_origin = Eigen::Vector3d::Zero();  ///< projector centre, camera frame
 };
 
 /// The paper's sensor with `scale` times its points: 2x the slits over the same fan (scale 2),
@@ -84,6 +87,7 @@ BenchInput simulated(const std::string& scenario, long frames, double step, int 
       sim.render(floor, sim.geometry().robotFromCamera(s.reference_mount), 1u << 30).image, rc);
   in.reference.setNominalScale(sensor, s.reference_mount);
   in.robot_from_camera = sim.geometry().robotFromCamera(s.mount);
+  in.light_origin = sim.geometry().projectorCentre();
   cli::Progress progress(static_cast<std::size_t>(frames),
                          "render x" + std::to_string(scale) + " " + s.name);
   for (long k = 0; k < frames; ++k) {
@@ -129,7 +133,9 @@ BenchInput recorded(const cli::ArgParser& args) {
   if (files.empty()) throw std::runtime_error("no PNG frames in '" + dir.string() + "'");
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  in.robot_from_camera = SensorGeometry(sensor).robotFromCamera(sensor.mount);
+  const SensorGeometry geometry(sensor);
+  in.robot_from_camera = geometry.robotFromCamera(sensor.mount);
+  in.light_origin = geometry.projectorCentre();
   const std::vector<double> x = robotPositions(dir, files.size());
   for (std::size_t k = 0; k < files.size(); ++k) {
     in.images.push_back(readMonoImage(files[k]));
@@ -240,26 +246,33 @@ struct PathRun {
   double valid_points = 0;  ///< per frame, mean
 };
 
-/// Our pipeline: extraction, floor fit and classification (FloorDetector::detect labels every
-/// point), ... (TODO(issue 7): clusters and map update once obstacles.h and occupancy_map.h are
-/// committed).
+/// Our pipeline, stage by stage as a walking robot runs it: extraction, floor fit and
+/// classification (FloorDetector::detect labels every point), obstacle clusters, map update.
 PathRun runOurs(const BenchInput& in, int passes) {
   const std::size_t n = in.images.size();
   PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), {}, 0};
   run.detections.resize(n);
   const Extractor extractor(in.reference);
   const FloorDetector detector;
+  const ObstacleClusterer clusterer;
   auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
   for (int pass = -1; pass < passes; ++pass) {  // pass -1: warm-up, not timed
+    OccupancyMap map;                           // each pass maps the same walk from scratch
     for (std::size_t k = 0; k < n; ++k) {
       const double t0 = threadSeconds();  // each stage as the pipeline calls it
       const ExtractionStats stats = extractor.extract(in.images[k], *cloud);
       const double t1 = threadSeconds();
       const FloorResult floor = detector.detect(cloud);
       const double t2 = threadSeconds();
+      const ObstacleResult obstacles = clusterer.cluster(cloud, floor, in.robot_from_camera);
+      const double t3 = threadSeconds();
+      map.insertFrame(*cloud, floor, obstacles, in.world_from_camera[k], in.light_origin);
+      const double t4 = threadSeconds();
       if (pass < 0) continue;
       run.extract.add(k, t1 - t0);
       run.floor.add(k, t2 - t1);
+      run.clusters.add(k, t3 - t2);
+      run.map.add(k, t4 - t3);
       if (pass > 0) continue;
       run.valid_points += static_cast<double>(stats.valid) / static_cast<double>(n);
       Detection& d = run.detections[k];
@@ -267,6 +280,7 @@ PathRun runOurs(const BenchInput& in, int passes) {
       for (const int i : floor.obstacles)
         if (hasXYZ((*cloud)[static_cast<std::size_t>(i)])) d.obstacle_points.push_back(i);
       std::sort(d.obstacle_points.begin(), d.obstacle_points.end());
+      d.clusters = obstacles.obstacles.size();
     }
   }
   return run;
@@ -518,8 +532,7 @@ void printTable(const std::vector<ScaleResult>& results, std::ostream* csv) {
 
 void printSummary(const ScaleResult& r) {
   const std::vector<Row> rows = rowsOf(r);
-  const Row& whole =
-      rows.back().ours.empty() ? rows[4] : rows.back();  // TODO(issue 7): see runOurs
+  const Row& whole = rows.back();
   std::printf(
       "scale %d: %zu frames, %.0f points per frame; %s: %.0f fps ours, %.0f fps stock PCL\n",
       r.scale, r.frames, r.points, whole.stage.c_str(), 1.0 / whole.ours.mean(),
