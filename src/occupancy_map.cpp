@@ -8,6 +8,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 #include <utility>
 
 namespace multislit {
@@ -85,11 +86,19 @@ struct OccupancyMap::FrameEvidence {
   std::vector<std::uint32_t> first;      ///< per row: first column with a measured point
   std::vector<std::uint32_t> last;       ///< per row: last column with a measured point
   std::vector<std::uint8_t> weak_point;  ///< per cloud point: weak, in a run long enough
+  /// Voxels whose leaf is at the lower clamping bound: a miss cannot change them (octomap's
+  /// updateNode() would search the tree to find that out), so it is skipped. Kept across frames;
+  /// emptied when the tree is rebuilt by crop().
+  std::unordered_set<std::uint64_t> saturated_free;
 
   void mark(const octomap::OcTreeKey& key, Kind kind) {
-    marks.push_back(
+    const std::uint64_t m =
         (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32) << 2 |
-        kind);
+        kind;
+    // The points of a slit come in order, several per voxel: a repeat of the last mark adds
+    // nothing (except for weak points, which are counted), and leaves less to sort.
+    if (kind != kWeak && !marks.empty() && marks.back() == m) return;
+    marks.push_back(m);
   }
   static octomap::OcTreeKey keyOf(std::uint64_t mark) {
     return octomap::OcTreeKey(static_cast<octomap::key_type>(mark >> 2),
@@ -268,14 +277,19 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
     }
     const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << 2);
     if (hit) {
+      e.saturated_free.erase(voxel);
       tree_->updateNode(key, log_hit_, true);
       ++stats.hit_voxels;
     } else if (weak >= config_.min_weak_points) {
+      e.saturated_free.erase(voxel);
       tree_->updateNode(key, log_weak_, true);
       ++stats.weak_voxels;
     } else if (weak == 0) {
-      tree_->updateNode(key, log_miss_, true);
       ++stats.free_voxels;
+      if (e.saturated_free.count(voxel)) continue;  // as octomap: no change at the bound
+      const octomap::OcTreeNode* node = tree_->updateNode(key, log_miss_, true);
+      if (node && node->getLogOdds() <= tree_->getClampingThresMinLog())
+        e.saturated_free.insert(voxel);
     }  // too few weak points: no evidence either way this frame
   }
   return stats;
@@ -353,6 +367,7 @@ void OccupancyMap::crop(const Eigen::Vector2d& robot_xy) {
   kept->updateInnerOccupancy();
   kept->prune();
   tree_ = std::move(kept);
+  evidence_->saturated_free.clear();
 }
 
 void OccupancyMap::save(const std::string& path) const {
