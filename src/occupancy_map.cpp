@@ -79,12 +79,17 @@ bool Footprint::contains(const Eigen::Vector2d& p) const {
 struct OccupancyMap::FrameEvidence {
   enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kWeak = 2, kHit = 3 };
   std::vector<std::uint64_t> marks;
-  octomap::KeyRay ray;                   ///< (allocates room for 100 000 keys: made once)
-  std::vector<double> weak;              ///< per RDMap row (slit): residual of a weak point [px]
-  std::vector<double> sum_sq;            ///< per row: squared floor residuals
-  std::vector<std::size_t> count;        ///< per row: floor points
-  std::vector<std::uint32_t> first;      ///< per row: first column with a measured point
-  std::vector<std::uint32_t> last;       ///< per row: last column with a measured point
+  octomap::KeyRay ray;  ///< (allocates room for 100 000 keys: made once)
+  /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
+  struct Slit {
+    double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
+    std::size_t count = 0;    ///< its floor points
+    std::uint32_t first = 0;  ///< first column with a floor point
+    std::uint32_t last = 0;   ///< last column with a floor point
+    double weak = 0.0;        ///< residual from which a point is weak [px]
+  };
+  std::vector<Slit> slits;
+  std::vector<double> residual;          ///< per cloud point (floor inliers only) [px]
   std::vector<std::uint8_t> weak_point;  ///< per cloud point: weak, in a run long enough
   /// Voxels whose leaf is at the lower clamping bound: a miss cannot change them (octomap's
   /// updateNode() would search the tree to find that out), so it is skipped. Kept across frames;
@@ -184,35 +189,32 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
   // Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
   // mean), and where each slit's measured points end (a profile cut by the slit's end is biased).
   const std::size_t rows = cloud.height, width = cloud.width;
-  e.sum_sq.assign(rows, 0.0);
-  e.count.assign(rows, 0);
-  e.first.assign(rows, static_cast<std::uint32_t>(width));
-  e.last.assign(rows, 0);
+  e.slits.assign(rows, FrameEvidence::Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
+  e.residual.resize(cloud.size());
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    const std::size_t row = idx / width;
+    FrameEvidence::Slit& slit = e.slits[idx / width];
     const auto col = static_cast<std::uint32_t>(idx % width);
     const double r = residual(cloud[idx]);
-    e.sum_sq[row] += r * r;
-    ++e.count[row];
-    e.first[row] = std::min(e.first[row], col);
-    e.last[row] = std::max(e.last[row], col);
+    e.residual[idx] = r;
+    slit.sum_sq += r * r;
+    ++slit.count;
+    slit.first = std::min(slit.first, col);
+    slit.last = std::max(slit.last, col);
   }
-  e.weak.resize(rows);
-  for (std::size_t row = 0; row < rows; ++row) {
-    const double sigma = e.count[row] > 1
-                             ? std::sqrt(e.sum_sq[row] / static_cast<double>(e.count[row]))
-                             : floor.residual_std;
-    e.weak[row] = config_.weak_sigmas * std::max(sigma, config_.min_sigma);
+  for (FrameEvidence::Slit& slit : e.slits) {
+    const double sigma = slit.count > 1 ? std::sqrt(slit.sum_sq / static_cast<double>(slit.count))
+                                        : floor.residual_std;
+    slit.weak = config_.weak_sigmas * std::max(sigma, config_.min_sigma);
   }
   const auto end = static_cast<std::uint32_t>(config_.weak_end_margin);
   e.weak_point.assign(cloud.size(), 0);
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    const std::size_t row = idx / width;
+    const FrameEvidence::Slit& slit = e.slits[idx / width];
     const auto col = static_cast<std::uint32_t>(idx % width);
-    e.weak_point[idx] = residual(cloud[idx]) >= e.weak[row] && col >= e.first[row] + end &&
-                        col + end <= e.last[row];
+    e.weak_point[idx] =
+        e.residual[idx] >= slit.weak && col >= slit.first + end && col + end <= slit.last;
   }
   // Only runs of min_weak_run consecutive weak points along a slit count: an object lifts every
   // row that crosses it, while noise lifts one row or a pair.
