@@ -59,6 +59,7 @@ template <typename T>
 void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
   const MetricScale& scale = reference_.scale;
+  const double inverse_f = 1.0 / scale.f;
   PointRDM* points = cloud.points.data();
   constexpr std::size_t kBatch = 64;  // regions measured per call
   PeakRegion<T> regions[kBatch];
@@ -79,8 +80,9 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
       if (std::isfinite(t.u_inf)) {
         const double depth = scale.disparity_constant / (centre - t.u_inf);
         if (depth > 0) {
-          p.x = static_cast<float>((centre - scale.cx) * depth / scale.f);
-          p.y = static_cast<float>((t.row - scale.cy) * depth / scale.f);
+          const double depth_per_px = depth * inverse_f;  // one division per point, not three
+          p.x = static_cast<float>((centre - scale.cx) * depth_per_px);
+          p.y = static_cast<float>((t.row - scale.cy) * depth_per_px);
           p.z = static_cast<float>(depth);
         }
       }
