@@ -468,9 +468,12 @@ bool hasAvx2Fma() {
   return yes;
 }
 
-/// Widest half window eightProfiles() takes: one 32-byte load holds a profile's 2 hw + 1 pixels
-/// and its two 3-pixel flanks.
-constexpr int kEightMaxHalfWindow = 12;
+/// Widest half window eightProfiles() takes: two 32-byte loads hold a profile's 2 hw + 1 pixels
+/// and its two 3-pixel flanks (one load up to hw = 12, the paper's sensor).
+constexpr int kEightMaxHalfWindow = 28;
+
+/// The 32-byte blocks that hold the 2 hw + 7 pixels of a profile and its flanks.
+constexpr int blocksOf(int hw) { return (2 * hw + 7 + 31) / 32; }
 
 /// ln(v) of eight normal floats v > 0, within 2.5e-7: v = 2^e m with m in [sqrt(1/2), sqrt(2)),
 /// ln v = e ln 2 + ln(1 + f), f = m - 1, and ln(1 + f) = f + f^2 q(f) with q the degree-6
@@ -493,8 +496,8 @@ inline __attribute__((target("avx2,fma"), always_inline)) __m256 logEight(__m256
 }
 
 /// The 32 bytes at each of p[0..7], transposed: byte l of column c (pixel p[l][c]) lands at
-/// out[columnAt(c) + l]. Three rounds of interleaving, each within the 128-bit halves, so that
-/// the high half does columns 16..31 as the low half does 0..15.
+/// out[columnAt(c) + l] (256 bytes). Three rounds of interleaving, each within the 128-bit
+/// halves, so that the high half does columns 16..31 as the low half does 0..15.
 inline __attribute__((target("avx2"), always_inline)) void transposeEight(
     const std::uint8_t* const p[8], std::uint8_t* out) {
   __m256i r[8], a[8], b[8];
@@ -517,9 +520,11 @@ inline __attribute__((target("avx2"), always_inline)) void transposeEight(
   }
 }
 
-/// Where transposeEight() puts column c: the store (c % 16) / 2, its half c / 16, its 8 bytes
-/// c % 2.
-constexpr int columnAt(int c) { return 32 * ((c % 16) / 2) + 16 * (c / 16) + 8 * (c % 2); }
+/// Where transposeEight() puts column c: its block of 32 columns c / 32 (one call each), the
+/// store (c % 16) / 2, its half (c % 32) / 16, its 8 bytes c % 2.
+constexpr int columnAt(int c) {
+  return 256 * (c / 32) + 32 * ((c % 16) / 2) + 16 * ((c % 32) / 16) + 8 * (c % 2);
+}
 
 /// Column c of transposeEight()'s output as eight floats.
 inline __attribute__((target("avx2"), always_inline)) __m256 columnOf(const std::uint8_t* columns,
@@ -529,8 +534,9 @@ inline __attribute__((target("avx2"), always_inline)) __m256 columnOf(const std:
 }
 
 /// The profiles of eight lanes around their maxima `tops` (not saturated; pixels top - hw - 3 to
-/// top - hw + 28 inside the row): background, contrast and width as measurePeakAt(), and the
-/// centre of Caruana's fit as gaussianCentre() (NaN where the fit does not hold).
+/// top - hw - 4 + 32 blocksOf(hw) inside the row): background, contrast and width as
+/// measurePeakAt(), and the centre of Caruana's fit as gaussianCentre() (NaN where the fit does not
+/// hold).
 struct EightProfiles {
   alignas(32) float contrast[8], at_left[8], slope[8];
   alignas(32) std::int32_t width[8];
@@ -543,8 +549,11 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
   const int hw = p.half_window;
   const std::uint8_t* starts[8];
   for (int l = 0; l < 8; ++l) starts[l] = rows[l] + tops[l] - hw - 3;
-  alignas(32) std::uint8_t columns[256];
-  transposeEight(starts, columns);
+  alignas(32) std::uint8_t columns[256 * blocksOf(kEightMaxHalfWindow)];
+  for (int block = 0; block < blocksOf(hw); ++block) {
+    transposeEight(starts, columns + 256 * block);
+    for (const std::uint8_t*& start : starts) start += 32;
+  }
   // Column c is pixel top + c - hw - 3: the left flank is c = 0..2, the window c = 3..2 hw + 3
   // (d = x - top from -hw to hw), the right flank c = 2 hw + 4..2 hw + 6.
   // The flanks' background line, bg(d) = at_top + slope d, and the contrast.
@@ -637,8 +646,8 @@ void measureEight(const PeakRegion<std::uint8_t>* regions, int count, int column
   const int hw = p.half_window;
   const int lanes = fillLanes(
       regions, count, columns, p,
-      [&](int x) { return x - hw - 3 >= 0 && x - hw - 3 + 31 <= columns - 1; }, peaks, found, rows,
-      tops, slots);
+      [&](int x) { return x - hw - 3 >= 0 && x - hw - 4 + 32 * blocksOf(hw) <= columns - 1; },
+      peaks, found, rows, tops, slots);
   if (lanes == 0) return;
   const EightProfiles f = eightProfiles(rows, tops, p);
   for (int l = 0; l < lanes; ++l) {

@@ -56,7 +56,7 @@ struct PeakRegion {
 /// measurePeak(regions[i].row, columns, regions[i].first, regions[i].last, ...) returns and
 /// measures. Faster: with the Gaussian estimator, CPUs with AVX2 and FMA measure eight 8-bit
 /// profiles at a time in float (the same profiles found, centres within float rounding: 7e-6 px
-/// on rendered frames); otherwise (16-bit images, profiles wider than 25 px, no FMA) AVX2 measures
+/// on rendered frames); otherwise (16-bit images, profiles wider than 57 px, no FMA) AVX2 measures
 /// four at a time in double, bit for bit.
 template <typename T>
 void measurePeaks(const PeakRegion<T>* regions, std::size_t count, int columns,
