@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <set>
@@ -49,6 +51,57 @@ class DisjointSets {
   std::vector<std::size_t> parent_, size_;
 };
 
+/// The sums over the points with x, y, z among points[indices[0 .. n)] of x, y, z, of their squares
+/// (xx, yy, zz) and of their cross products (xy, yz, zx), taken about (x0, y0, z0) so that they
+/// stay small.
+struct XYZSums {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), squares = Eigen::Vector3d::Zero(),
+                  cross = Eigen::Vector3d::Zero();
+  std::size_t points = 0;
+};
+
+/// One pass in float with four lanes (x, y, z, 0) per point, added to double every kFlush points,
+/// which keeps the sums accurate to ~1e-7. Two sets of lanes take the points in turn, so that each
+/// add need not wait for the one before.
+XYZSums sumXYZ(const PointRDM* points, const pcl::index_t* indices, std::size_t n, float x0,
+               float y0, float z0) {
+  typedef float F4 __attribute__((vector_size(16)));
+  typedef std::int32_t I4 __attribute__((vector_size(16)));
+  constexpr std::size_t kFlush = 64;
+  const I4 xyz = {-1, -1, -1, 0};
+  const F4 origin = {x0, y0, z0, 0.0f};
+  struct Lanes {
+    F4 sum = {}, squares = {}, cross = {};
+    std::size_t points = 0;
+  };
+  // p minus the origin, as (x, y, z, 0); (0, 0, 0, 0) when p has no x, y, z, which adds nothing.
+  const auto add = [&](Lanes& lanes, const PointRDM& p) {
+    const bool ok = hasXYZ(p);
+    F4 q;  // (x, y, z, data[3])
+    std::memcpy(&q, p.data, sizeof q);
+    const F4 d = (F4)((I4)(q - origin) & (ok ? xyz : I4{}));
+    lanes.sum += d;
+    lanes.squares += d * d;
+    lanes.cross += d * __builtin_shufflevector(d, d, 1, 2, 0, 3);  // (xy, yz, zx, 0)
+    lanes.points += ok;
+  };
+  XYZSums out;
+  for (std::size_t k = 0; k < n;) {
+    Lanes even, odd;
+    for (const std::size_t stop = std::min(n, k + kFlush); k < stop; k += 2) {
+      add(even, points[indices[k]]);
+      if (k + 1 < stop) add(odd, points[indices[k + 1]]);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      out.sum[axis] += static_cast<double>(even.sum[axis]) + odd.sum[axis];
+      out.squares[axis] += static_cast<double>(even.squares[axis]) + odd.squares[axis];
+      out.cross[axis] += static_cast<double>(even.cross[axis]) + odd.cross[axis];
+    }
+    out.points += even.points + odd.points;
+  }
+  return out;
+}
+
 }  // namespace
 
 void ObstacleClustererConfig::validate() const {
@@ -68,25 +121,28 @@ std::size_t ObstacleResult::pointCount() const {
 
 MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& inliers) {
   MetricFloor floor;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
-  for (const auto i : inliers) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    if (!hasXYZ(p)) continue;
-    const Eigen::Vector3d q(p.x, p.y, p.z);
-    sum += q;
-    sum_sq += q * q.transpose();
-    ++floor.points;
-  }
+  const std::size_t n = inliers.size();
+  std::size_t first = 0;
+  while (first < n && !hasXYZ(cloud[static_cast<std::size_t>(inliers[first])])) ++first;
+  if (first == n) return floor;
+  // The sums about the first floor point with x, y, z: it lies among the others.
+  const PointRDM& o = cloud[static_cast<std::size_t>(inliers[first])];
+  const XYZSums sums =
+      sumXYZ(cloud.points.data(), inliers.data() + first, n - first, o.x, o.y, o.z);
+  floor.points = sums.points;
   if (floor.points < 3) return floor;
-  const double n = static_cast<double>(floor.points);
-  const Eigen::Vector3d mean = sum / n;
-  const Eigen::Matrix3d covariance = sum_sq / n - mean * mean.transpose();
+  const Eigen::Vector3d origin(o.x, o.y, o.z);
+  const double count = static_cast<double>(floor.points);
+  const Eigen::Vector3d mean = sums.sum / count;  // about the origin
+  Eigen::Matrix3d covariance;
+  covariance << sums.squares[0], sums.cross[0], sums.cross[2], sums.cross[0], sums.squares[1],
+      sums.cross[1], sums.cross[2], sums.cross[1], sums.squares[2];
+  covariance = covariance / count - mean * mean.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
   // The plane's normal is the axis of least spread; the two others must spread (not a line).
   if (eigen.eigenvalues()(1) <= 1e-12) return floor;
   floor.normal = eigen.eigenvectors().col(0).normalized();
-  floor.offset = -floor.normal.dot(mean);
+  floor.offset = -floor.normal.dot(mean + origin);
   if (floor.offset < 0) {  // the camera (the origin) is above the floor
     floor.normal = -floor.normal;
     floor.offset = -floor.offset;

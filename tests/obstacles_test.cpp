@@ -7,7 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -167,6 +172,52 @@ TEST(ObstacleClusterer, MetricFloorIsTheFloorUnderTheSensor) {
       geometry().robotFromCamera(MountConfig{}).linear() * s.obstacles.floor.normal;
   EXPECT_GT(up.z(), std::cos(0.5 * M_PI / 180));
   EXPECT_GT(s.obstacles.floor.points, 4000u);
+}
+
+TEST(ObstacleClusterer, MetricFloorIsThePrincipalAxesPlaneOfTheFloorPoints) {
+  // A noisy tilted floor 0.45 m from the camera, with points lacking x, y, z and indices out of
+  // order: fitMetricFloor's float pass against the principal axes computed plainly in double.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> across(-0.3f, 0.3f);
+  std::normal_distribution<float> noise(0.0f, 0.001f);
+  pcl::PointCloud<PointRDM> cloud;
+  pcl::Indices inliers;
+  for (int k = 0; k < 5000; ++k) {
+    PointRDM p;
+    p.x = across(rng);
+    p.y = 0.2f + across(rng);
+    p.z = 0.45f + 0.3f * p.x - 0.5f * p.y + noise(rng);
+    if (k % 97 == 0) p.y = std::numeric_limits<float>::quiet_NaN();
+    cloud.push_back(p);
+    if (k % 5 != 0) inliers.push_back(k);
+  }
+  std::shuffle(inliers.begin(), inliers.end(), rng);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (const auto i : inliers)
+    if (std::isfinite(cloud[i].y)) {
+      mean += cloud[i].getVector3fMap().cast<double>();
+      ++n;
+    }
+  mean /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const auto i : inliers)
+    if (std::isfinite(cloud[i].y)) {
+      const Eigen::Vector3d d = cloud[i].getVector3fMap().cast<double>() - mean;
+      covariance += d * d.transpose() / static_cast<double>(n);
+    }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  Eigen::Vector3d normal = eigen.eigenvectors().col(0);
+  double offset = -normal.dot(mean);
+  if (offset < 0) {
+    normal = -normal;
+    offset = -offset;
+  }
+  const MetricFloor floor = fitMetricFloor(cloud, inliers);
+  ASSERT_TRUE(floor.valid);
+  EXPECT_EQ(floor.points, n);
+  EXPECT_LT((floor.normal - normal).norm(), 1e-6);
+  EXPECT_NEAR(floor.offset, offset, 1e-6 * offset);
 }
 
 TEST(ObstacleClusterer, NoFloorNoObstacles) {
