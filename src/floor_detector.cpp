@@ -59,26 +59,31 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   result.inliers.resize(n);
   result.obstacles.resize(n);
   result.obstacle_residuals.resize(n);
+  const PointRDM* points = cloud.points.data();
+  pcl::index_t* inliers = result.inliers.data();
+  pcl::index_t* obstacles = result.obstacles.data();
+  float* residuals = result.obstacle_residuals.data();
   std::size_t floor = 0, off = 0;
   double sum_sq = 0.0;
   for (const auto i : valid) {
-    const PointRDM& p = cloud[i];
+    const PointRDM& p = points[i];
     const float r = p.dk - (a * p.u + b * p.v + c);
     const bool in = std::abs(r) <= t;
-    result.inliers[floor] = i;
-    result.obstacles[off] = i;
-    result.obstacle_residuals[off] = r;
-    sum_sq += in ? static_cast<double>(r) * r : 0.0;
+    inliers[floor] = i;
+    obstacles[off] = i;
+    residuals[off] = r;
+    const double r_in = r * static_cast<float>(in);  // 0 for an obstacle, without a branch
+    sum_sq += r_in * r_in;
     floor += in;
     off += !in;
   }
+  // Before any call, which would make the compiler keep the sum in memory throughout the loop.
+  if (floor > 0) result.residual_std = std::sqrt(sum_sq / static_cast<double>(floor));
   result.inliers.resize(floor);
   result.obstacles.resize(off);
   result.obstacle_residuals.resize(off);
   result.obstacles.shrink_to_fit();
   result.obstacle_residuals.shrink_to_fit();
-  if (!result.inliers.empty())
-    result.residual_std = std::sqrt(sum_sq / static_cast<double>(result.inliers.size()));
 }
 
 FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetectorConfig& config,

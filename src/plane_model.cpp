@@ -224,41 +224,41 @@ SampleConsensusModelRDMapPlane::SampleConsensusModelRDMapPlane(const PointCloudC
   model_size_ = kModelSize;
   input_ = cloud;
   indices_ = std::make_shared<pcl::Indices>(indices);
-  cacheValidPoints();
+  cacheValidPoints(true);
 }
 
 void SampleConsensusModelRDMapPlane::setInputCloud(const PointCloudConstPtr& cloud) {
   input_ = cloud;
   indices_ = std::make_shared<pcl::Indices>();
-  if (input_) {
-    indices_->resize(input_->size());
-    std::iota(indices_->begin(), indices_->end(), 0);
-  }
-  cacheValidPoints();
+  cacheValidPoints(false);
 }
 
-void SampleConsensusModelRDMapPlane::cacheValidPoints() {
+void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {
   const std::size_t size = input_ ? input_->size() : 0;
-  u_.resize(indices_->size());
-  v_.resize(indices_->size());
-  dk_.resize(indices_->size());
-  // Plain pointers: the loop then keeps them in registers.
+  const std::size_t candidates = size == 0 ? 0 : among_indices ? indices_->size() : size;
+  indices_->resize(candidates);
+  u_.resize(candidates);
+  v_.resize(candidates);
+  dk_.resize(candidates);
+  // Plain pointers and the point's values in locals: the loop then keeps them in registers and
+  // does not read a point again after each store.
   const PointRDM* points = size > 0 ? input_->points.data() : nullptr;
   pcl::index_t* index = indices_->data();
   float* u = u_.data();
   float* v = v_.data();
   float* dk = dk_.data();
   std::size_t kept = 0;
-  for (std::size_t k = 0, n = size > 0 ? indices_->size() : 0; k < n; ++k) {
+  for (std::size_t k = 0; k < candidates; ++k) {
     // Branch-free: every point is written at `kept`, which moves on only for a valid one.
-    const pcl::index_t i = index[k];
+    const pcl::index_t i = among_indices ? index[k] : static_cast<pcl::index_t>(k);
     const bool inside = i >= 0 && static_cast<std::size_t>(i) < size;
     const PointRDM& p = points[inside ? i : 0];
+    const float pu = p.u, pv = p.v, pdk = p.dk;
     index[kept] = i;
-    u[kept] = p.u;
-    v[kept] = p.v;
-    dk[kept] = p.dk;
-    kept += inside && isValidRDMPoint(p);
+    u[kept] = pu;
+    v[kept] = pv;
+    dk[kept] = pdk;
+    kept += inside && (pu - pu) + (pv - pv) + (pdk - pdk) == 0.0f;  // isValidRDMPoint(p)
   }
   indices_->resize(kept);
   shuffled_indices_ = *indices_;

@@ -113,10 +113,11 @@ class SampleConsensusModelRDMapPlane : public pcl::SampleConsensusModel<PointRDM
   bool isSampleGood(const pcl::Indices& samples) const override;
 
  private:
-  /// Keeps the valid points among indices_ and copies their u, v, dk, centred on their mean, into
-  /// contiguous arrays: the residual loops then run over memory in order and vectorize, and float
-  /// sums of centred values stay accurate.
-  void cacheValidPoints();
+  /// Keeps the valid points among indices_ (`among_indices`), else among all points of the cloud,
+  /// as indices_, and copies their u, v, dk, centred on their mean, into contiguous arrays: the
+  /// residual loops then run over memory in order and vectorize, and float sums of centred values
+  /// stay accurate.
+  void cacheValidPoints(bool among_indices);
   /// False once setIndices() replaced the cached indices: then the loops read the cloud.
   bool cached() const { return indices_ == cached_indices_; }
   /// C of the model for the centred arrays: dk - mean_dk = A (u - mean_u) + B (v - mean_v) + C'.
