@@ -2,6 +2,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -174,6 +176,46 @@ __attribute__((target_clones("avx2", "default"))) InlierSums sumInliers(const fl
   return out;
 }
 
+/// Copies the index, u, v and dk of the valid points among points[0 .. n), n a multiple of four,
+/// into the arrays, in order, four points at a time: their (u, v, dk, slit) transposed into one
+/// register per field, then stored four at once when all four are valid (nearly always). Returns
+/// the number of valid points.
+std::size_t gatherValidByFour(const PointRDM* points, std::size_t n, pcl::index_t* index, float* u,
+                              float* v, float* dk) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < n; k += 4) {
+    __m128 pu = _mm_loadu_ps(&points[k].u), pv = _mm_loadu_ps(&points[k + 1].u);
+    __m128 pdk = _mm_loadu_ps(&points[k + 2].u), slit = _mm_loadu_ps(&points[k + 3].u);
+    _MM_TRANSPOSE4_PS(pu, pv, pdk, slit);
+    const auto i = static_cast<pcl::index_t>(k);
+    const __m128i ids = _mm_setr_epi32(i, i + 1, i + 2, i + 3);
+    // isValidRDMPoint() of each: (u - u) + (v - v) + (dk - dk) == 0.
+    const __m128 finite =
+        _mm_add_ps(_mm_add_ps(_mm_sub_ps(pu, pu), _mm_sub_ps(pv, pv)), _mm_sub_ps(pdk, pdk));
+    const int valid = _mm_movemask_ps(_mm_cmpeq_ps(finite, _mm_setzero_ps()));
+    if (valid == 0xf) {
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(index + kept), ids);
+      _mm_storeu_ps(u + kept, pu);
+      _mm_storeu_ps(v + kept, pv);
+      _mm_storeu_ps(dk + kept, pdk);
+      kept += 4;
+      continue;
+    }
+    alignas(16) float lu[4], lv[4], ldk[4];
+    _mm_store_ps(lu, pu);
+    _mm_store_ps(lv, pv);
+    _mm_store_ps(ldk, pdk);
+    for (int j = 0; j < 4; ++j) {  // as in cacheValidPoints()
+      index[kept] = i + j;
+      u[kept] = lu[j];
+      v[kept] = lv[j];
+      dk[kept] = ldk[j];
+      kept += (valid >> j) & 1;
+    }
+  }
+  return kept;
+}
+
 }  // namespace
 
 RDMapPlaneFit fitRDMapPlane(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& indices) {
@@ -247,8 +289,12 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {
   float* u = u_.data();
   float* v = v_.data();
   float* dk = dk_.data();
-  std::size_t kept = 0;
-  for (std::size_t k = 0; k < candidates; ++k) {
+  std::size_t kept = 0, k = 0;
+  if (!among_indices) {
+    k = candidates - candidates % 4;
+    kept = gatherValidByFour(points, k, index, u, v, dk);
+  }
+  for (; k < candidates; ++k) {
     // Branch-free: every point is written at `kept`, which moves on only for a valid one.
     const pcl::index_t i = among_indices ? index[k] : static_cast<pcl::index_t>(k);
     const bool inside = i >= 0 && static_cast<std::size_t>(i) < size;
