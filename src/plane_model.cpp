@@ -1,8 +1,8 @@
 #include "multislit/plane_model.h"
 
-#include <Eigen/Cholesky>
+#include "rdm_simd.h"
 
-#include <immintrin.h>
+#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
@@ -184,27 +184,22 @@ std::size_t gatherValidByFour(const PointRDM* points, std::size_t n, pcl::index_
                               float* v, float* dk) {
   std::size_t kept = 0;
   for (std::size_t k = 0; k < n; k += 4) {
-    __m128 pu = _mm_loadu_ps(&points[k].u), pv = _mm_loadu_ps(&points[k + 1].u);
-    __m128 pdk = _mm_loadu_ps(&points[k + 2].u), slit = _mm_loadu_ps(&points[k + 3].u);
-    _MM_TRANSPOSE4_PS(pu, pv, pdk, slit);
+    const simd::UVDK4 p = simd::loadUVDK(points[k], points[k + 1], points[k + 2], points[k + 3]);
+    const int valid = simd::validMask(p);
     const auto i = static_cast<pcl::index_t>(k);
-    const __m128i ids = _mm_setr_epi32(i, i + 1, i + 2, i + 3);
-    // isValidRDMPoint() of each: (u - u) + (v - v) + (dk - dk) == 0.
-    const __m128 finite =
-        _mm_add_ps(_mm_add_ps(_mm_sub_ps(pu, pu), _mm_sub_ps(pv, pv)), _mm_sub_ps(pdk, pdk));
-    const int valid = _mm_movemask_ps(_mm_cmpeq_ps(finite, _mm_setzero_ps()));
     if (valid == 0xf) {
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(index + kept), ids);
-      _mm_storeu_ps(u + kept, pu);
-      _mm_storeu_ps(v + kept, pv);
-      _mm_storeu_ps(dk + kept, pdk);
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(index + kept),
+                       _mm_setr_epi32(i, i + 1, i + 2, i + 3));
+      _mm_storeu_ps(u + kept, p.u);
+      _mm_storeu_ps(v + kept, p.v);
+      _mm_storeu_ps(dk + kept, p.dk);
       kept += 4;
       continue;
     }
     alignas(16) float lu[4], lv[4], ldk[4];
-    _mm_store_ps(lu, pu);
-    _mm_store_ps(lv, pv);
-    _mm_store_ps(ldk, pdk);
+    _mm_store_ps(lu, p.u);
+    _mm_store_ps(lv, p.v);
+    _mm_store_ps(ldk, p.dk);
     for (int j = 0; j < 4; ++j) {  // as in cacheValidPoints()
       index[kept] = i + j;
       u[kept] = lu[j];

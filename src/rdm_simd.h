@@ -1,0 +1,31 @@
+// Four RDMap points at a time in SSE registers (private to the library).
+#pragma once
+
+#include "multislit/point_types.h"
+
+#include <immintrin.h>
+
+namespace multislit::simd {
+
+/// u, v and dk of four points, one register per field (lane j: point j).
+struct UVDK4 {
+  __m128 u, v, dk;
+};
+
+/// Loads (u, v, dk, slit) of each point, adjacent in PointRDM, and transposes them.
+inline UVDK4 loadUVDK(const PointRDM& p0, const PointRDM& p1, const PointRDM& p2,
+                      const PointRDM& p3) {
+  __m128 u = _mm_loadu_ps(&p0.u), v = _mm_loadu_ps(&p1.u), dk = _mm_loadu_ps(&p2.u),
+         slit = _mm_loadu_ps(&p3.u);
+  _MM_TRANSPOSE4_PS(u, v, dk, slit);
+  return {u, v, dk};
+}
+
+/// isValidRDMPoint() of the four points: bit j set when point j is valid.
+inline int validMask(const UVDK4& p) {
+  const __m128 finite =
+      _mm_add_ps(_mm_add_ps(_mm_sub_ps(p.u, p.u), _mm_sub_ps(p.v, p.v)), _mm_sub_ps(p.dk, p.dk));
+  return _mm_movemask_ps(_mm_cmpeq_ps(finite, _mm_setzero_ps()));
+}
+
+}  // namespace multislit::simd
