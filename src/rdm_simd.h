@@ -5,7 +5,14 @@
 
 #include <immintrin.h>
 
+#include <cstddef>
+
 namespace multislit::simd {
+
+static_assert(offsetof(PointRDM, v) == offsetof(PointRDM, u) + 4 &&
+                  offsetof(PointRDM, dk) == offsetof(PointRDM, u) + 8 &&
+                  offsetof(PointRDM, slit) == offsetof(PointRDM, u) + 12,
+              "loadUVDK() reads u, v, dk and slit as four adjacent 32-bit fields");
 
 /// u, v and dk of four points, one register per field (lane j: point j).
 struct UVDK4 {
