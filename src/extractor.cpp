@@ -61,7 +61,7 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
   const MetricScale& scale = reference_.scale;
   const double inverse_f = 1.0 / scale.f;
   PointRDM* points = cloud.points.data();
-  constexpr std::size_t kBatch = 64;  // regions measured per call
+  constexpr std::size_t kBatch = 8;  // regions measured per call
   PeakRegion<T> regions[kBatch];
   Peak peaks[kBatch];
   bool found[kBatch];
@@ -70,6 +70,19 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
     const Task* tasks = tasks_.data() + begin;
     for (std::size_t i = 0; i < n; ++i)
       regions[i] = {image.ptr<T>(tasks[i].row), tasks[i].first, tasks[i].last};
+    // A new frame is in memory, not in the cache: ask for the regions kAhead batches on now, so
+    // that they arrive while these are measured.
+    constexpr std::size_t kAhead = 8;
+    const std::size_t ahead = begin + kAhead * kBatch;
+    for (std::size_t i = ahead; i < std::min(ahead + kBatch, tasks_.size()); ++i) {
+      const Task& next = tasks_[i];
+      const auto* row = reinterpret_cast<const char*>(image.ptr<T>(next.row));
+      const int first = std::max(next.first, 0) * static_cast<int>(sizeof(T));
+      const int last = std::min(next.last, image.cols - 1) * static_cast<int>(sizeof(T));
+      if (first > last) continue;
+      for (int byte = first; byte < last + 64; byte += 64)
+        __builtin_prefetch(row + std::min(byte, last));
+    }
     measurePeaks(regions, n, image.cols, params, peaks, found);
     for (std::size_t i = 0; i < n; ++i) {
       if (!found[i]) continue;
