@@ -2,6 +2,7 @@
 
 #include "multislit/plane_model.h"
 
+#include "config_check.h"
 #include "rdm_simd.h"
 
 #include <algorithm>
@@ -14,9 +15,7 @@ namespace multislit {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("FloorDetectorConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("FloorDetectorConfig");
 
 /// Sec. III-B: q planes through three points of three different slits; the plane with the most
 /// points within `threshold` wins. With `local_refit`, each new best plane is replaced by the

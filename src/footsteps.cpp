@@ -1,5 +1,7 @@
 #include "multislit/footsteps.h"
 
+#include "config_check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,9 +14,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("FootConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("FootConfig");
 
 double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();

@@ -1,5 +1,7 @@
 #include "multislit/gait.h"
 
+#include "config_check.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,9 +12,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("GaitConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("GaitConfig");
 
 }  // namespace
 

@@ -2,6 +2,8 @@
 // callbacks on another.
 #include "multislit/grabber.h"
 
+#include "config_check.h"
+
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
@@ -19,9 +21,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kLatencyWindow = 256;  // frames kept for the latency percentiles
 
-void require(bool ok, const char* field, const char* what) {
-  if (!ok) throw std::invalid_argument(std::string("GrabberConfig.") + field + " " + what);
-}
+constexpr detail::FieldCheck require("GrabberConfig");
 
 // The extractor's settings, with the grabber's frame_id; validates the whole config.
 ExtractorConfig extractorConfig(const GrabberConfig& config) {

@@ -1,5 +1,7 @@
 #include "multislit/obstacles.h"
 
+#include "config_check.h"
+
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
@@ -20,9 +22,7 @@ namespace multislit {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("ObstacleClustererConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("ObstacleClustererConfig");
 
 bool hasXYZ(const PointRDM& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);

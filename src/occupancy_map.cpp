@@ -1,5 +1,7 @@
 #include "multislit/occupancy_map.h"
 
+#include "config_check.h"
+
 #include <octomap/octomap_utils.h>
 
 #include <algorithm>
@@ -15,9 +17,7 @@ namespace multislit {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("OccupancyMapConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("OccupancyMapConfig");
 
 bool isProbability(double p) { return p > 0 && p < 1; }
 

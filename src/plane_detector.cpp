@@ -1,5 +1,7 @@
 #include "multislit/plane_detector.h"
 
+#include "config_check.h"
+
 #include <pcl/ModelCoefficients.h>
 #include <pcl/PointIndices.h>
 #include <pcl/common/point_tests.h>
@@ -16,9 +18,7 @@ namespace multislit {
 
 namespace {
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("PlaneDetectorConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("PlaneDetectorConfig");
 
 pcl::Indices finiteIndices(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
   pcl::Indices finite;

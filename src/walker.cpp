@@ -1,5 +1,7 @@
 #include "multislit/walker.h"
 
+#include "config_check.h"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -11,9 +13,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("WalkerConfig." + field + " " + rule);
-}
+constexpr detail::FieldCheck require("WalkerConfig");
 
 }  // namespace
 
