@@ -183,6 +183,15 @@ bool hasAvx2() {
   return yes;
 }
 
+/// The largest of the 16 bytes of h.
+inline std::uint8_t maxByte(__m128i h) {
+  h = _mm_max_epu8(h, _mm_srli_si128(h, 8));
+  h = _mm_max_epu8(h, _mm_srli_si128(h, 4));
+  h = _mm_max_epu8(h, _mm_srli_si128(h, 2));
+  h = _mm_max_epu8(h, _mm_srli_si128(h, 1));
+  return static_cast<std::uint8_t>(_mm_cvtsi128_si32(h) & 0xff);
+}
+
 inline __attribute__((target("avx2"), always_inline)) __m256i loadBytes(const std::uint8_t* p) {
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
 }
@@ -192,12 +201,8 @@ inline __attribute__((target("avx2"), always_inline)) __m256i loadBytes(const st
 __attribute__((target("avx2"))) int firstMaxAvx2(const std::uint8_t* p, int n) {
   __m256i m = loadBytes(p + n - 32);
   for (int i = 0; i + 32 < n; i += 32) m = _mm256_max_epu8(m, loadBytes(p + i));
-  __m128i h = _mm_max_epu8(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
-  h = _mm_max_epu8(h, _mm_srli_si128(h, 8));
-  h = _mm_max_epu8(h, _mm_srli_si128(h, 4));
-  h = _mm_max_epu8(h, _mm_srli_si128(h, 2));
-  h = _mm_max_epu8(h, _mm_srli_si128(h, 1));
-  const __m256i best = _mm256_set1_epi8(static_cast<char>(_mm_cvtsi128_si32(h) & 0xff));
+  const __m256i best = _mm256_set1_epi8(static_cast<char>(
+      maxByte(_mm_max_epu8(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1)))));
   for (int i = 0;; i += 32) {
     const int at = std::min(i, n - 32);
     const auto hits =
@@ -219,11 +224,7 @@ int firstMax<std::uint8_t>(const std::uint8_t* p, int n) {
   const auto load = [p](int i) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
   __m128i m = load(n - 16);
   for (int i = 0; i + 16 < n; i += 16) m = _mm_max_epu8(m, load(i));
-  m = _mm_max_epu8(m, _mm_srli_si128(m, 8));
-  m = _mm_max_epu8(m, _mm_srli_si128(m, 4));
-  m = _mm_max_epu8(m, _mm_srli_si128(m, 2));
-  m = _mm_max_epu8(m, _mm_srli_si128(m, 1));
-  const __m128i best = _mm_set1_epi8(static_cast<char>(_mm_cvtsi128_si32(m) & 0xff));
+  const __m128i best = _mm_set1_epi8(static_cast<char>(maxByte(m)));
   for (int i = 0;; i += 16) {
     const int at = std::min(i, n - 16);
     const int hits = _mm_movemask_epi8(_mm_cmpeq_epi8(load(at), best));
