@@ -277,8 +277,8 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {
   u_.resize(candidates);
   v_.resize(candidates);
   dk_.resize(candidates);
-  // Plain pointers and the point's values in locals: the loop then keeps them in registers and
-  // does not read a point again after each store.
+  // Plain pointers, and the point read (and tested) before the stores: the loop then keeps them in
+  // registers and does not read a point again after each store.
   const PointRDM* points = size > 0 ? input_->points.data() : nullptr;
   pcl::index_t* index = indices_->data();
   float* u = u_.data();
@@ -294,12 +294,13 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {
     const pcl::index_t i = among_indices ? index[k] : static_cast<pcl::index_t>(k);
     const bool inside = i >= 0 && static_cast<std::size_t>(i) < size;
     const PointRDM& p = points[inside ? i : 0];
+    const bool keep = inside && isValidRDMPoint(p);
     const float pu = p.u, pv = p.v, pdk = p.dk;
     index[kept] = i;
     u[kept] = pu;
     v[kept] = pv;
     dk[kept] = pdk;
-    kept += inside && (pu - pu) + (pv - pv) + (pdk - pdk) == 0.0f;  // isValidRDMPoint(p)
+    kept += keep;
   }
   indices_->resize(kept);
   shuffled_indices_ = *indices_;
