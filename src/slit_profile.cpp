@@ -476,24 +476,40 @@ constexpr int kEightMaxHalfWindow = 28;
 /// The 32-byte blocks that hold the 2 hw + 7 pixels of a profile and its flanks.
 constexpr int blocksOf(int hw) { return (2 * hw + 7 + 31) / 32; }
 
-/// ln(v) of eight normal floats v > 0, within 2.5e-7: v = 2^e m with m in [sqrt(1/2), sqrt(2)),
-/// ln v = e ln 2 + ln(1 + f), f = m - 1, and ln(1 + f) = f + f^2 q(f) with q the degree-6
-/// Chebyshev interpolant of (ln(1 + f) - f) / f^2 on that interval (its error: 1.2e-7).
+/// ln(v) of eight normal floats v > 0, within 4e-7 for v below 256: v = 2^e m with m in [sqrt(1/2),
+/// sqrt(2)), ln v = e ln 2 + ln(1 + f), f = m - 1, and ln(1 + f) = f + f^2 q(f) with q the degree-6
+/// Chebyshev interpolant of (ln(1 + f) - f) / f^2 on that interval (its error: 1.2e-7). e comes
+/// from the bits of v less those of sqrt(1/2), whose borrow picks the interval, and q is summed
+/// in pairs of terms (Estrin), a chain of four operations instead of Horner's six.
 inline __attribute__((target("avx2,fma"), always_inline)) __m256 logEight(__m256 v) {
   const __m256i bits = _mm256_castps_si256(v);
-  __m256 m = _mm256_castsi256_ps(_mm256_or_si256(
-      _mm256_and_si256(bits, _mm256_set1_epi32(0x007fffff)), _mm256_set1_epi32(0x3f800000)));
-  __m256i e = _mm256_sub_epi32(_mm256_srli_epi32(bits, 23), _mm256_set1_epi32(127));
-  const __m256 high = _mm256_cmp_ps(m, _mm256_set1_ps(1.41421356f), _CMP_GT_OQ);
-  m = _mm256_blendv_ps(m, m * 0.5f, high);
-  e = _mm256_sub_epi32(e, _mm256_castps_si256(high));  // high is -1 where m was halved
-  const __m256 f = m - 1.0f;
+  const __m256i e = _mm256_srai_epi32(_mm256_sub_epi32(bits, _mm256_set1_epi32(0x3f3504f3)), 23);
+  const __m256 m = _mm256_castsi256_ps(_mm256_sub_epi32(bits, _mm256_slli_epi32(e, 23)));
+  const __m256 f = m - 1.0f, f2 = f * f, f4 = f2 * f2;
   constexpr float kQ[7] = {-0.500000912f, 0.333341136f, -0.249824512f, 0.199290571f,
                            -0.171323873f, 0.15984096f,  -0.101885865f};
-  __m256 q = _mm256_set1_ps(kQ[6]);
-  for (int k = 5; k >= 0; --k) q = _mm256_fmadd_ps(q, f, _mm256_set1_ps(kQ[k]));
+  __m256 k[7];
+  for (int i = 0; i < 7; ++i) k[i] = _mm256_set1_ps(kQ[i]);
+  const __m256 q01 = _mm256_fmadd_ps(k[1], f, k[0]), q23 = _mm256_fmadd_ps(k[3], f, k[2]);
+  const __m256 q456 = _mm256_fmadd_ps(k[6], f2, _mm256_fmadd_ps(k[5], f, k[4]));
+  const __m256 q = _mm256_fmadd_ps(f4, q456, _mm256_fmadd_ps(f2, q23, q01));
   return _mm256_fmadd_ps(_mm256_cvtepi32_ps(e), _mm256_set1_ps(0.693147181f),
-                         _mm256_fmadd_ps(f * f, q, f));
+                         _mm256_fmadd_ps(f2, q, f));
+}
+
+/// The four ints at p as doubles.
+inline __attribute__((target("avx2"), always_inline)) __m256d fourInts(const std::int32_t* p) {
+  return _mm256_cvtepi32_pd(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+}
+
+/// The weight w = v^2 of eight values v and w ln v, both zero where v <= floor (out of the fit;
+/// the logarithm of 1 there is exactly 0).
+inline __attribute__((target("avx2,fma"), always_inline)) void weighEight(const float* values,
+                                                                          __m256 floor, __m256& w,
+                                                                          __m256& wl) {
+  const __m256 v = _mm256_load_ps(values), in = _mm256_cmp_ps(v, floor, _CMP_GT_OQ);
+  w = _mm256_and_ps(v * v, in);
+  wl = w * logEight(_mm256_blendv_ps(_mm256_set1_ps(1.0f), v, in));
 }
 
 /// The 32 bytes at each of p[0..7], transposed: byte l of column c (pixel p[l][c]) lands at
@@ -567,39 +583,55 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
   const __m256 at_top = _mm256_fmadd_ps(slope, _mm256_set1_ps(static_cast<float>(hw + 2)), at_left);
   const __m256 contrast = columnOf(columns, hw + 3) - at_top;
   const __m256 half = 0.5f * contrast, floor = static_cast<float>(p.fit_threshold) * contrast;
-  const __m256 one = _mm256_set1_ps(1.0f);
   __m256i width = _mm256_setzero_si256(), used = width;
   __m256 s0 = _mm256_setzero_ps(), s1 = s0, s2 = s0, s3 = s0, s4 = s0, r0 = s0, r1 = s0, r2 = s0;
   // Three passes over the window, none with a branch or a chain from one pixel to the next but
-  // the sums, so that the core overlaps the pixels: the background-free values, their weights and
-  // the lanes' widths; the logarithms; the sums of the fit.
+  // the sums, so that the core overlaps the pixels: the background-free values and the lanes'
+  // widths; over the pixels where some lane is in the fit, the weights and the logarithms; the
+  // sums of the fit.
   constexpr int kWindow = 2 * kEightMaxHalfWindow + 1;
-  alignas(32) float weights[kWindow][8], values[kWindow][8];
-  int lowest = 2 * hw + 1, highest = -1;  // first and last pixel where some lane is in the fit
+  alignas(32) float values[kWindow][8];
+  std::uint64_t some_in = 0;  // bit j: some lane has pixel j in the fit (2 hw + 1 <= 57 bits)
   __m256 bg = _mm256_fnmadd_ps(slope, _mm256_set1_ps(static_cast<float>(hw)), at_top);  // at -hw
   for (int j = 0; j <= 2 * hw; ++j, bg += slope) {
     const __m256 v = columnOf(columns, j + 3) - bg;
     width = _mm256_sub_epi32(width, _mm256_castps_si256(_mm256_cmp_ps(v, half, _CMP_GT_OQ)));
     const __m256 in = _mm256_cmp_ps(v, floor, _CMP_GT_OQ);
     used = _mm256_sub_epi32(used, _mm256_castps_si256(in));
-    _mm256_store_ps(weights[j], _mm256_and_ps(v * v, in));     // 0 outside the fit
-    _mm256_store_ps(values[j], _mm256_blendv_ps(one, v, in));  // ln 1 = 0 outside
-    if (_mm256_movemask_ps(in) != 0) lowest = std::min(lowest, j), highest = j;
+    _mm256_store_ps(values[j], v);
+    some_in |= std::uint64_t{_mm256_movemask_ps(in) != 0} << j;
   }
-  for (int j = lowest; j <= highest; ++j)
-    _mm256_store_ps(values[j], logEight(_mm256_load_ps(values[j])));
-  for (int j = lowest; j <= highest; ++j) {
-    const __m256 w = _mm256_load_ps(weights[j]), wl = w * _mm256_load_ps(values[j]);
-    const auto d = static_cast<float>(j - hw);
-    const __m256 d1 = _mm256_set1_ps(d), d2 = _mm256_set1_ps(d * d);
-    s0 += w;
-    s1 = _mm256_fmadd_ps(w, d1, s1);
-    s2 = _mm256_fmadd_ps(w, d2, s2);
-    s3 = _mm256_fmadd_ps(w, _mm256_set1_ps(d * d * d), s3);
-    s4 = _mm256_fmadd_ps(w, _mm256_set1_ps(d * d * d * d), s4);
-    r0 += wl;
-    r1 = _mm256_fmadd_ps(wl, d1, r1);
-    r2 = _mm256_fmadd_ps(wl, d2, r2);
+  // The weights and logarithms out to the farthest pixel in the fit on either side, then the sums
+  // over pixels d and -d together: their even moments take w(d) + w(-d), the odd ones
+  // w(d) - w(-d). The pixels out of the fit add zeros.
+  const int reach =  // |d| of the farthest pixel in the fit; -1 where no lane has one
+      some_in == 0 ? -1
+                   : std::max(hw - __builtin_ctzll(some_in), 63 - __builtin_clzll(some_in) - hw);
+  alignas(32) float weights[kWindow][8];
+  for (int j = hw - reach; j <= hw + reach; ++j) {
+    __m256 w, wl;
+    weighEight(values[j], floor, w, wl);
+    _mm256_store_ps(weights[j], w);
+    _mm256_store_ps(values[j], wl);
+  }
+  if (reach >= 0) s0 = _mm256_load_ps(weights[hw]), r0 = _mm256_load_ps(values[hw]);
+  for (int d = 1; d <= reach; ++d) {
+    const __m256 w_minus = _mm256_load_ps(weights[hw - d]),
+                 w_plus = _mm256_load_ps(weights[hw + d]);
+    const __m256 wl_minus = _mm256_load_ps(values[hw - d]),
+                 wl_plus = _mm256_load_ps(values[hw + d]);
+    const __m256 even = w_plus + w_minus, odd = w_plus - w_minus;
+    const __m256 even_l = wl_plus + wl_minus, odd_l = wl_plus - wl_minus;
+    const auto dd = static_cast<float>(d);
+    const __m256 d1 = _mm256_set1_ps(dd), d2 = _mm256_set1_ps(dd * dd);
+    s0 += even;
+    s1 = _mm256_fmadd_ps(odd, d1, s1);
+    s2 = _mm256_fmadd_ps(even, d2, s2);
+    s3 = _mm256_fmadd_ps(odd, _mm256_set1_ps(dd * dd * dd), s3);
+    s4 = _mm256_fmadd_ps(even, _mm256_set1_ps(dd * dd * dd * dd), s4);
+    r0 += even_l;
+    r1 = _mm256_fmadd_ps(odd_l, d1, r1);
+    r2 = _mm256_fmadd_ps(even_l, d2, r2);
   }
   EightProfiles out;
   _mm256_store_ps(out.contrast, contrast);
@@ -607,12 +639,13 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
   _mm256_store_ps(out.slope, slope);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.width), width);
   // Caruana's fit in double, as gaussianCentre(), four lanes at a time; the determinant of the
-  // normal equations cancels in the centre -b / 2c.
-  alignas(32) std::int32_t used_lanes[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(used_lanes), used);
+  // normal equations cancels in the centre -b / 2c, so c < 0 is: nc and det of unlike signs.
   alignas(32) float sums[8][8];  // s0..s4, r0..r2 of the eight lanes
   const __m256 all[8] = {s0, s1, s2, s3, s4, r0, r1, r2};
   for (int k = 0; k < 8; ++k) _mm256_store_ps(sums[k], all[k]);
+  alignas(32) std::int32_t used_lanes[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(used_lanes), used);
+  const __m256d magnitude = _mm256_set1_pd(-0.0);  // the sign bit: |x| is x without it
   for (int h = 0; h < 2; ++h) {
     __m256d wide[8];
     for (int k = 0; k < 8; ++k) wide[k] = _mm256_cvtps_pd(_mm_load_ps(sums[k] + 4 * h));
@@ -625,17 +658,17 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
     const __m256d nc =
         m00 * (m11 * q2 - q1 * m12) - m01 * (m01 * q2 - q1 * m02) + q0 * (m01 * m12 - m11 * m02);
     const __m256d offset = -nb / (2.0 * nc);
-    alignas(32) double det_l[4], nc_l[4], offset_l[4];
-    _mm256_store_pd(det_l, det);
-    _mm256_store_pd(nc_l, nc);
-    _mm256_store_pd(offset_l, offset);
-    for (int k = 0; k < 4; ++k) {
-      const int l = 4 * h + k;
-      const bool fitted = used_lanes[l] >= 3 && std::abs(det_l[k]) >= 1e-12 &&
-                          (nc_l[k] < 0) != (det_l[k] < 0) && nc_l[k] != 0 &&
-                          std::abs(offset_l[k]) <= 2 * hw;
-      out.centre[l] = fitted ? tops[l] + offset_l[k] : std::numeric_limits<double>::quiet_NaN();
-    }
+    __m256d fitted = _mm256_cmp_pd(fourInts(used_lanes + 4 * h), _mm256_set1_pd(3.0), _CMP_GE_OQ);
+    fitted = _mm256_and_pd(
+        fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, det), _mm256_set1_pd(1e-12), _CMP_GE_OQ));
+    fitted = _mm256_and_pd(fitted, _mm256_xor_pd(nc, det));  // sign bit: unlike signs
+    fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(nc, _mm256_setzero_pd(), _CMP_NEQ_OQ));
+    fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, offset),
+                                                 _mm256_set1_pd(2.0 * hw), _CMP_LE_OQ));
+    const __m256d centre = fourInts(tops + 4 * h) + offset;
+    _mm256_store_pd(
+        out.centre + 4 * h,
+        _mm256_blendv_pd(_mm256_set1_pd(std::numeric_limits<double>::quiet_NaN()), centre, fitted));
   }
   return out;
 }
