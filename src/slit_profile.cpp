@@ -309,6 +309,23 @@ inline __attribute__((target("avx2"), always_inline)) __m256d logFour(__m256d v)
   return k * FastLog::kLn2Hi - ((half_f2 - (s * (half_f2 + r) + k * FastLog::kLn2Lo)) - f);
 }
 
+/// Caruana's normal equations [s0 s1 s2; s1 s2 s3; s2 s3 s4] (a b c) = (r0 r1 r2) in four lanes,
+/// by Cramer's rule as gaussianCentre(): b = nb / det, c = nc / det.
+struct Cramer {
+  __m256d det, nb, nc;
+};
+
+inline __attribute__((target("avx2"), always_inline)) Cramer solveByCramer(__m256d s0, __m256d s1,
+                                                                           __m256d s2, __m256d s3,
+                                                                           __m256d s4, __m256d r0,
+                                                                           __m256d r1, __m256d r2) {
+  const __m256d m00 = s0, m01 = s1, m02 = s2, m11 = s2, m12 = s3, m22 = s4;
+  return {
+      m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02),
+      m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02),
+      m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)};
+}
+
 /// The profiles of four lanes around their maxima `top` (not saturated, both flanks inside the
 /// row): background, contrast and width as profilePass(), the centre as gaussianCentre().
 struct FourProfiles {
@@ -363,16 +380,9 @@ __attribute__((target("avx2"))) FourProfiles fourProfiles(const T* const rows[4]
     r1 += wl * d;
     r2 += wl * d2;
   }
-  // Caruana's fit in every lane, as gaussianCentre(): the normal equations by Cramer's rule.
-  const __m256d m00 = s0, m01 = s1, m02 = s2, m11 = s2, m12 = s3, m22 = s4;
-  const __m256d det =
-      m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
-  const __m256d b =
-      (m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02)) /
-      det;
-  const __m256d c =
-      (m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)) /
-      det;
+  // Caruana's fit in every lane, as gaussianCentre().
+  const Cramer fit = solveByCramer(s0, s1, s2, s3, s4, r0, r1, r2);
+  const __m256d det = fit.det, b = fit.nb / det, c = fit.nc / det;
   const __m256d offset = -b / (2 * c);
   const __m256d magnitude = _mm256_set1_pd(-0.0);  // |x|: x without its sign bit
   __m256d fitted = _mm256_castsi256_pd(_mm256_cmpgt_epi64(used, _mm256_set1_epi64x(2)));
@@ -465,7 +475,7 @@ void measureFour(const PeakRegion<T>* regions, int count, int columns, const Pro
 // Results differ from measurePeakAt() by float rounding only (the test bounds it).
 
 bool hasAvx2Fma() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  static const bool yes = hasAvx2() && __builtin_cpu_supports("fma");
   return yes;
 }
 
@@ -649,14 +659,8 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
   for (int h = 0; h < 2; ++h) {
     __m256d wide[8];
     for (int k = 0; k < 8; ++k) wide[k] = _mm256_cvtps_pd(_mm_load_ps(sums[k] + 4 * h));
-    const __m256d m00 = wide[0], m01 = wide[1], m02 = wide[2], m11 = m02, m12 = wide[3],
-                  m22 = wide[4], q0 = wide[5], q1 = wide[6], q2 = wide[7];
-    const __m256d det = m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) +
-                        m02 * (m01 * m12 - m11 * m02);
-    const __m256d nb =
-        m00 * (q1 * m22 - m12 * q2) - q0 * (m01 * m22 - m12 * m02) + m02 * (m01 * q2 - q1 * m02);
-    const __m256d nc =
-        m00 * (m11 * q2 - q1 * m12) - m01 * (m01 * q2 - q1 * m02) + q0 * (m01 * m12 - m11 * m02);
+    const auto [det, nb, nc] =
+        solveByCramer(wide[0], wide[1], wide[2], wide[3], wide[4], wide[5], wide[6], wide[7]);
     const __m256d offset = -nb / (2.0 * nc);
     __m256d fitted = _mm256_cmp_pd(fourInts(used_lanes + 4 * h), _mm256_set1_pd(3.0), _CMP_GE_OQ);
     fitted = _mm256_and_pd(
