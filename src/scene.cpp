@@ -41,6 +41,32 @@ double woodGrain(double x, double y, double scale, uint64_t seed) {
          0.15 * valueNoise(x / scale, y / (0.35 * scale), seed + 2);
 }
 
+// Square tiles of edge `scale` (the grid shifted by the seed), each with its own shade and a
+// faint mottle, separated by grout lines of `grout_width` centred on the tile edges.
+double tileAlbedo(const FloorConfig& f, double x, double y) {
+  const double s = f.texture_scale;
+  const double gx = x / s + hash01(-1, 0, f.texture_seed),
+               gy = y / s + hash01(0, -1, f.texture_seed);
+  const double fx = std::floor(gx), fy = std::floor(gy);
+  const double edge = s * std::min({gx - fx, 1 - (gx - fx), gy - fy, 1 - (gy - fy)});
+  if (edge < 0.5 * f.grout_width) return f.grout_albedo;
+  const double shade =
+      2 * hash01(static_cast<int64_t>(fx), static_cast<int64_t>(fy), f.texture_seed) - 1;
+  const double mottle = valueNoise(x / 0.01, y / 0.01, f.texture_seed + 3);
+  return f.albedo * (1.0 + f.texture_amplitude * shade + 0.03 * mottle);
+}
+
+// Carpet: fibre tufts of size `scale` and a finer octave, high contrast.
+double carpetFibres(double x, double y, double scale, uint64_t seed) {
+  return 0.65 * valueNoise(x / scale, y / scale, seed) +
+         0.35 * valueNoise(x / (0.45 * scale), y / (0.45 * scale), seed + 1);
+}
+
+// A ceiling lamp that a glossy floor mirrors into the camera [m, world frame], and the width of
+// its mirror image (Phong exponent of the gloss lobe).
+const Eigen::Vector3d kLamp(0.9, 0.25, 2.4);
+constexpr double kGlossExponent = 40.0;
+
 void keepNearest(Hit& best, double s, int object, const Eigen::Vector3d& normal) {
   if (s > kEps && s < best.distance) {
     best.distance = s;
@@ -160,6 +186,24 @@ const char* shapeName(ShapeType t) {
 
 }  // namespace
 
+const char* floorTextureName(FloorTexture texture) {
+  switch (texture) {
+    case FloorTexture::Wood:
+      return "wood";
+    case FloorTexture::Tiles:
+      return "tiles";
+    case FloorTexture::Carpet:
+      return "carpet";
+  }
+  return "?";
+}
+
+FloorTexture floorTextureFromName(const std::string& name) {
+  for (FloorTexture t : {FloorTexture::Wood, FloorTexture::Tiles, FloorTexture::Carpet})
+    if (name == floorTextureName(t)) return t;
+  throw std::invalid_argument("floor texture must be wood, tiles or carpet, not '" + name + "'");
+}
+
 SceneObject SceneObject::sphere(const std::string& name, const Eigen::Vector3d& centre,
                                 double radius) {
   SceneObject o;
@@ -196,6 +240,8 @@ SceneObject SceneObject::box(const std::string& name, const Eigen::Vector3d& cen
 void SceneObject::validate() const {
   const std::string who = "scene object '" + name + "': ";
   if (!(albedo >= 0 && albedo <= 1)) throw std::invalid_argument(who + "albedo must be in [0, 1]");
+  if (!(stripe_width >= 0.25 && stripe_width <= 4))
+    throw std::invalid_argument(who + "stripe_width must be in [0.25, 4]");
   switch (type) {
     case ShapeType::Sphere:
     case ShapeType::Cylinder:
@@ -250,11 +296,32 @@ Hit Scene::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direc
 
 double Scene::albedo(int object, const Eigen::Vector3d& point) const {
   if (object == 0) {
-    const double g = woodGrain(point.x(), point.y(), floor.texture_scale, floor.texture_seed);
+    if (floor.texture == FloorTexture::Tiles)
+      return std::clamp(tileAlbedo(floor, point.x(), point.y()), 0.0, 1.0);
+    const double g =
+        floor.texture == FloorTexture::Wood
+            ? woodGrain(point.x(), point.y(), floor.texture_scale, floor.texture_seed)
+            : carpetFibres(point.x(), point.y(), floor.texture_scale, floor.texture_seed);
     return std::clamp(floor.albedo * (1.0 + floor.texture_amplitude * g), 0.0, 1.0);
   }
   if (object > 0 && object <= static_cast<int>(objects.size())) return objects[object - 1].albedo;
   return 0.0;
+}
+
+double Scene::laserAlbedo(int object) const { return object == 0 ? floor.laser_albedo : 1.0; }
+
+double Scene::stripeWidth(int object) const {
+  if (object == 0) return floor.stripe_width;
+  if (object > 0 && object <= static_cast<int>(objects.size()))
+    return objects[object - 1].stripe_width;
+  return 1.0;
+}
+
+double Scene::floorGlare(const Eigen::Vector3d& point, const Eigen::Vector3d& ray) const {
+  if (!(floor.gloss > 0)) return 0.0;
+  const Eigen::Vector3d mirrored(ray.x(), ray.y(), -ray.z());
+  const double c = mirrored.dot((kLamp - point).normalized());
+  return c > 0 ? floor.gloss * std::pow(c, kGlossExponent) : 0.0;
 }
 
 std::string Scene::objectName(int object) const {
@@ -270,6 +337,16 @@ void Scene::validate() const {
     throw std::invalid_argument("scene: floor.texture_amplitude must be in [0, 1)");
   if (!(floor.texture_scale > 0))
     throw std::invalid_argument("scene: floor.texture_scale must be > 0");
+  if (!(floor.grout_width >= 0 && floor.grout_width < 0.5 * floor.texture_scale))
+    throw std::invalid_argument("scene: floor.grout_width must be in [0, texture_scale / 2)");
+  if (!(floor.grout_albedo >= 0 && floor.grout_albedo <= 1))
+    throw std::invalid_argument("scene: floor.grout_albedo must be in [0, 1]");
+  if (!(floor.laser_albedo > 0 && floor.laser_albedo <= 1))
+    throw std::invalid_argument("scene: floor.laser_albedo must be in (0, 1]");
+  if (!(floor.gloss >= 0 && floor.gloss <= 10))
+    throw std::invalid_argument("scene: floor.gloss must be in [0, 10]");
+  if (!(floor.stripe_width >= 0.25 && floor.stripe_width <= 4))
+    throw std::invalid_argument("scene: floor.stripe_width must be in [0.25, 4]");
   for (const SceneObject& o : objects) o.validate();
 }
 
@@ -278,12 +355,20 @@ Scene Scene::load(const std::string& path) {
   Scene scene;
   try {
     const cv::FileNode f = fs["floor"];
+    std::string texture = floorTextureName(scene.floor.texture);
+    readField(f, "texture", texture);
+    scene.floor.texture = floorTextureFromName(texture);
     readField(f, "albedo", scene.floor.albedo);
     readField(f, "texture_amplitude", scene.floor.texture_amplitude);
     readField(f, "texture_scale", scene.floor.texture_scale);
     int seed = static_cast<int>(scene.floor.texture_seed);
     readField(f, "texture_seed", seed);
     scene.floor.texture_seed = static_cast<unsigned>(seed);
+    readField(f, "grout_width", scene.floor.grout_width);
+    readField(f, "grout_albedo", scene.floor.grout_albedo);
+    readField(f, "laser_albedo", scene.floor.laser_albedo);
+    readField(f, "gloss", scene.floor.gloss);
+    readField(f, "stripe_width", scene.floor.stripe_width);
     const cv::FileNode list = fs["objects"];
     if (!list.empty() && !list.isSeq()) throw std::invalid_argument("'objects' must be a list");
     for (const cv::FileNode& n : list) {
@@ -306,6 +391,7 @@ Scene Scene::load(const std::string& path) {
       }
       readField(n, "radius", o.radius);
       readField(n, "albedo", o.albedo);
+      readField(n, "stripe_width", o.stripe_width);
       scene.objects.push_back(o);
     }
     scene.validate();
@@ -319,9 +405,13 @@ void Scene::save(const std::string& path) const {
   cv::FileStorage fs = openYamlForWrite(path, "scene");
   fs << "floor"
      << "{";
+  fs << "texture" << floorTextureName(floor.texture);
   fs << "albedo" << floor.albedo << "texture_amplitude" << floor.texture_amplitude;
   fs << "texture_scale" << floor.texture_scale << "texture_seed"
      << static_cast<int>(floor.texture_seed);
+  fs << "grout_width" << floor.grout_width << "grout_albedo" << floor.grout_albedo;
+  fs << "laser_albedo" << floor.laser_albedo << "gloss" << floor.gloss;
+  fs << "stripe_width" << floor.stripe_width;
   fs << "}";
   fs << "objects"
      << "[";
@@ -340,7 +430,7 @@ void Scene::save(const std::string& path) const {
     } else {
       fs << "radius" << o.radius;
     }
-    fs << "albedo" << o.albedo << "}";
+    fs << "albedo" << o.albedo << "stripe_width" << o.stripe_width << "}";
   }
   fs << "]";
 }

@@ -1,5 +1,6 @@
 #include "multislit/simulator.h"
 
+#include <boost/math/special_functions/gamma.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -47,6 +48,24 @@ class RowRandom {
 
 enum Stream : uint64_t { kSpeckle = 1, kSensorNoise = 2 };
 
+// The gamma speckle's quantile table: standard normal values z in [-reach, reach], `step` per unit.
+constexpr double kQuantileReach = 8.0, kQuantileStep = 128.0;
+
+// Gamma(shape k, mean 1) quantile at the normal quantile of each z of the table.
+std::vector<float> gammaQuantiles(double contrast) {
+  const double k = 1.0 / (contrast * contrast);
+  const int n = static_cast<int>(2 * kQuantileReach * kQuantileStep) + 1;
+  std::vector<float> table(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const double z = i / kQuantileStep - kQuantileReach;
+    // The lower tail from P, the upper tail from Q: both accurate far out.
+    const double x = z < 0 ? boost::math::gamma_p_inv(k, 0.5 * std::erfc(-z / std::sqrt(2.0)))
+                           : boost::math::gamma_q_inv(k, 0.5 * std::erfc(z / std::sqrt(2.0)));
+    table[static_cast<std::size_t>(i)] = static_cast<float>(x / k);
+  }
+  return table;
+}
+
 // Mean of exp(-x^2 / 2 sigma^2) over a pixel on which x = d0 + a p + b q, p and q uniform in
 // [-1/2, 1/2]: a Gaussian sheet profile integrated exactly over a pixel where the sheet offset
 // is linear. With F(z) = z erf(z) + exp(-z^2) / sqrt(pi), the antiderivative of erf.
@@ -71,6 +90,7 @@ struct Shader {
   const RenderConfig& render;
   Eigen::Isometry3d world_from_camera;
   Eigen::Vector3d camera_centre, projector_centre;
+  double sigma;  // the sheet's width as rendered, before the surface's factor [rad]
 
   // What one ray sees: the surface, its albedo and ambient light and, near a sheet, the laser's
   // radiance before the sheet profile (0 when shadowed, facing away or beyond the slit's end).
@@ -80,6 +100,8 @@ struct Shader {
     double offset = std::numeric_limits<double>::infinity();  // from the nearest sheet [rad]
     double t = 0;         // position along the slit (projector y / z)
     double albedo = 0;    // at 660 nm
+    double glare = 0;     // ambient mirrored by a glossy floor, relative to albedo 1
+    double sigma = 0;     // the sheet's width on this surface [rad]
     double radiance = 0;  // laser at the sheet's centre [FS]
   };
 
@@ -98,6 +120,9 @@ struct Shader {
     s.t = xy.y();
     const Eigen::Vector3d point_w = camera_centre + hit.distance * ray_w;
     s.albedo = hit.object == known_object ? known_albedo : scene.albedo(hit.object, point_w);
+    if (hit.object == 0) s.glare = scene.floorGlare(point_w, ray_w);
+    const double width = scene.stripeWidth(hit.object);
+    s.sigma = sigma * width;
     if (std::abs(s.offset) > reach || std::abs(s.t) > geometry.slitTMax()) return s;
     const Eigen::Vector3d to_point = point_w - projector_centre;
     const double range = to_point.norm();
@@ -105,15 +130,53 @@ struct Shader {
     const double incidence = -hit.normal.dot(dir);
     if (incidence <= 0) return s;
     if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return s;  // shadow
-    s.radiance = render.laser_peak * s.albedo * incidence * (0.5 / range) * (0.5 / range);
+    // The sheet's power is kept when the surface widens it: its peak drops by the same factor.
+    s.radiance = render.laser_peak * s.albedo * incidence * (0.5 / range) * (0.5 / range) *
+                 (scene.laserAlbedo(hit.object) / (render.stripe_width * width));
     return s;
   }
 
   double laser(const Sample& s) const {
-    const double sigma = geometry.config().projector.sheet_sigma;
-    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (sigma * sigma));
+    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (s.sigma * s.sigma));
   }
 };
+
+// Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel): a
+// white Gaussian field blurred by the grain, then either 1 + contrast x field clamped at 0
+// (Gaussian) or the field's normal quantile mapped to the gamma distribution's (Gamma).
+void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
+                  const std::vector<float>& gamma_quantiles) {
+  cv::Mat speckle(laser.rows, laser.cols, CV_32F);
+  cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSpeckle);
+      float* s = speckle.ptr<float>(r);
+      for (int c = 0; c < laser.cols; ++c) s[c] = static_cast<float>(rng.normal());
+    }
+  });
+  const double g = render.speckle_grain;
+  cv::GaussianBlur(speckle, speckle, cv::Size(), g, g, cv::BORDER_REFLECT);
+  if (render.speckle_model == SpeckleModel::Gaussian) {
+    speckle = 1.0 + render.speckle_contrast * 2.0 * std::sqrt(M_PI) * g * speckle;
+    cv::max(speckle, 0.0, speckle);
+  } else {
+    // The blurred field's std is the sum of the squared 1-D kernel weights (OpenCV's kernel).
+    const cv::Mat k = cv::getGaussianKernel(cv::saturate_cast<int>(g * 8 + 1) | 1, g, CV_64F);
+    const double scale = 1.0 / k.dot(k), last = static_cast<double>(gamma_quantiles.size() - 1);
+    cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
+      for (int r = rows.start; r < rows.end; ++r) {
+        float* s = speckle.ptr<float>(r);
+        for (int c = 0; c < laser.cols; ++c) {
+          const double x = std::clamp((s[c] * scale + kQuantileReach) * kQuantileStep, 0.0, last);
+          const auto i = std::min(static_cast<std::size_t>(x), gamma_quantiles.size() - 2);
+          const double f = x - static_cast<double>(i);
+          s[c] = static_cast<float>((1 - f) * gamma_quantiles[i] + f * gamma_quantiles[i + 1]);
+        }
+      }
+    });
+  }
+  laser = laser.mul(speckle);
+}
 
 }  // namespace
 
@@ -123,34 +186,48 @@ void RenderConfig::validate() const {
   };
   require(laser_peak >= 0, "laser_peak", "must be >= 0");
   require(ambient >= 0, "ambient", "must be >= 0");
-  require(speckle_contrast >= 0 && speckle_contrast < 1, "speckle_contrast", "must be in [0, 1)");
+  if (speckle_model == SpeckleModel::Gaussian)
+    require(speckle_contrast >= 0 && speckle_contrast < 1, "speckle_contrast",
+            "must be in [0, 1) (Gaussian speckle)");
+  else
+    require(speckle_contrast >= 0 && speckle_contrast <= 1, "speckle_contrast",
+            "must be in [0, 1] (gamma speckle)");
   require(speckle_grain >= 0.3 && speckle_grain <= 10, "speckle_grain", "must be in [0.3, 10] px");
   require(blur_sigma >= 0 && blur_sigma <= 10, "blur_sigma", "must be in [0, 10] px");
   require(full_well >= 100, "full_well", "must be >= 100 e-");
   require(read_noise >= 0 && read_noise < 0.5, "read_noise", "must be in [0, 0.5) FS");
   require(bit_depth == 8 || bit_depth == 16, "bit_depth", "must be 8 or 16");
   require(supersample >= 1 && supersample <= 16, "supersample", "must be in [1, 16]");
+  require(stripe_width >= 0.25 && stripe_width <= 4, "stripe_width", "must be in [0.25, 4]");
+  require(gamma >= 0.2 && gamma <= 5, "gamma", "must be in [0.2, 5]");
 }
 
 Simulator::Simulator(const SensorConfig& sensor, const RenderConfig& render)
     : geometry_(sensor), render_(render) {
   render_.validate();
+  if (render_.speckle_model == SpeckleModel::Gamma && render_.speckle_contrast > 0)
+    gamma_quantiles_ = gammaQuantiles(render_.speckle_contrast);
 }
 
 RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
                                 uint64_t frame) const {
   const int width = geometry_.config().camera.width, height = geometry_.config().camera.height;
+  const double sigma = geometry_.config().projector.sheet_sigma * render_.stripe_width,
+               pixel = 1.0 / geometry_.config().camera.f();
   const Shader shader{scene,
                       geometry_,
                       render_,
                       world_from_camera,
                       world_from_camera.translation(),
-                      world_from_camera * geometry_.projectorCentre()};
+                      world_from_camera * geometry_.projectorCentre(),
+                      sigma};
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
-  const double sigma = geometry_.config().projector.sheet_sigma,
-               pixel = 1.0 / geometry_.config().camera.f();
-  const double reach = 4.5 * sigma + 2 * pixel;  // beyond 4.5 sigma a sheet adds < 4e-5 of its peak
+  double widest = scene.stripeWidth(0);  // the widest sheet on any surface
+  for (std::size_t k = 0; k < scene.objects.size(); ++k)
+    widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
+  // Beyond 4.5 sigma a sheet adds < 4e-5 of its peak.
+  const double reach = 4.5 * sigma * widest + 2 * pixel;
   std::vector<Shader::Sample> centre(static_cast<std::size_t>(width) * height);
   cv::Mat ambient(height, width, CV_32F), near(height, width, CV_8U);
   cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
@@ -158,7 +235,7 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
       for (int c = 0; c < width; ++c) {
         const Shader::Sample& s = centre[static_cast<std::size_t>(r) * width + c] =
             shader.trace(c, r, reach);
-        ambient.ptr<float>(r)[c] = static_cast<float>(render_.ambient * s.albedo);
+        ambient.ptr<float>(r)[c] = static_cast<float>(render_.ambient * (s.albedo + s.glare));
         near.ptr<uchar>(r)[c] =
             std::abs(s.offset) < reach && std::abs(s.t) < geometry_.slitTMax() + 2 * pixel;
       }
@@ -194,7 +271,7 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
         if (linear(r, c)) {
           const double gu = 0.5 * (at(r, c + 1).offset - at(r, c - 1).offset);
           const double gv = 0.5 * (at(r + 1, c).offset - at(r - 1, c).offset);
-          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma);
+          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, m.sigma);
         } else {
           for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)
@@ -208,21 +285,8 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   });
 
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
-  if (render_.noise && render_.speckle_contrast > 0) {
-    cv::Mat speckle(height, width, CV_32F);
-    cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-      for (int r = rows.start; r < rows.end; ++r) {
-        RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSpeckle);
-        float* s = speckle.ptr<float>(r);
-        for (int c = 0; c < width; ++c) s[c] = static_cast<float>(rng.normal());
-      }
-    });
-    const double g = render_.speckle_grain;
-    cv::GaussianBlur(speckle, speckle, cv::Size(), g, g, cv::BORDER_REFLECT);
-    speckle = 1.0 + render_.speckle_contrast * 2.0 * std::sqrt(M_PI) * g * speckle;
-    cv::max(speckle, 0.0, speckle);
-    laser = laser.mul(speckle);
-  }
+  if (render_.noise && render_.speckle_contrast > 0)
+    applySpeckle(laser, render_, frame, gamma_quantiles_);
 
   // 4. Lens blur, then shot and read noise, saturation and quantization.
   cv::Mat irradiance = ambient + laser;
@@ -243,7 +307,9 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
                                          render_.read_noise * render_.read_noise);
           value += noise * rng.normal();
         }
-        const double dn = std::round(std::clamp(value, 0.0, 1.0) * full);
+        value = std::clamp(value, 0.0, 1.0);
+        if (render_.gamma != 1.0) value = std::pow(value, 1.0 / render_.gamma);
+        const double dn = std::round(value * full);
         if (render_.bit_depth == 8)
           out.image.ptr<uint8_t>(r)[c] = static_cast<uint8_t>(dn);
         else

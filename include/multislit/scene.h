@@ -22,6 +22,9 @@ struct SceneObject {
   double radius = 0.0;                                   ///< sphere / cylinder radius [m]
   double yaw = 0.0;                                      ///< box rotation about the vertical [deg]
   double albedo = 0.7;                                   ///< diffuse reflectance at 660 nm [-]
+  /// Factor on the laser sheet's width as seen on this surface, its power kept (subsurface
+  /// scattering, e.g. a ping-pong ball: > 1, wider and dimmer); symmetric about the sheet [-]
+  double stripe_width = 1.0;
 
   static SceneObject sphere(const std::string& name, const Eigen::Vector3d& centre, double radius);
   /// A capped cylinder (a cable, a screw standing up).
@@ -33,13 +36,31 @@ struct SceneObject {
   double top() const;     ///< highest z of the object [m]
 };
 
-/// The floor: a Lambertian plane with a wood-like albedo texture.
-struct FloorConfig {
-  double albedo = 0.55;             ///< mean reflectance at 660 nm [-]
-  double texture_amplitude = 0.15;  ///< relative albedo variation of the grain [-]
-  double texture_scale = 0.012;     ///< size of the grain features [m]
-  unsigned texture_seed = 7;        ///< which floor
+/// Albedo pattern of the floor.
+enum class FloorTexture {
+  Wood,    ///< grain along world x, features of texture_scale
+  Tiles,   ///< square tiles of edge texture_scale, dark grout lines between them
+  Carpet,  ///< fine high-contrast fibres of size texture_scale
 };
+
+/// The floor: a Lambertian plane with an albedo texture, optionally glossy.
+struct FloorConfig {
+  FloorTexture texture = FloorTexture::Wood;  ///< the albedo pattern
+  double albedo = 0.55;                       ///< mean reflectance at 660 nm [-]
+  double texture_amplitude = 0.15;  ///< relative albedo variation (grain, tile to tile, fibres) [-]
+  double texture_scale = 0.012;     ///< grain feature size, tile edge or fibre size [m]
+  unsigned texture_seed = 7;        ///< which floor
+  double grout_width = 0.004;       ///< tiles: width of the grout lines [m]
+  double grout_albedo = 0.10;       ///< tiles: reflectance of the grout [-]
+  double laser_albedo =
+      1.0;             ///< share of the diffuse reflectance the laser gets back (glossy < 1) [-]
+  double gloss = 0.0;  ///< glare of a ceiling lamp mirrored by the floor, peak over albedo [-]
+  double stripe_width = 1.0;  ///< factor on the sheet's width as seen on the floor (carpet > 1) [-]
+};
+
+/// "wood", "tiles", "carpet"; and back (throws std::invalid_argument for other names).
+const char* floorTextureName(FloorTexture texture);
+FloorTexture floorTextureFromName(const std::string& name);
 
 /// Result of a ray cast.
 struct Hit {
@@ -59,6 +80,13 @@ class Scene {
                 double max_distance = std::numeric_limits<double>::infinity()) const;
   /// Reflectance at a world point on the given surface.
   double albedo(int object, const Eigen::Vector3d& point) const;
+  /// Share of the diffuse reflectance that returns laser light (the floor's laser_albedo, else 1).
+  double laserAlbedo(int object) const;
+  /// Factor on the laser sheet's width on the given surface (FloorConfig / SceneObject).
+  double stripeWidth(int object) const;
+  /// Ambient glare seen along the unit world ray `ray` where it meets the floor at `point`,
+  /// relative to the ambient light on albedo 1: a ceiling lamp's mirror image (0 without gloss).
+  double floorGlare(const Eigen::Vector3d& point, const Eigen::Vector3d& ray) const;
   /// "floor", the object's name, or "none".
   std::string objectName(int object) const;
 

@@ -13,10 +13,19 @@
 
 namespace multislit {
 
+/// How the laser speckle's intensity is distributed (per pixel, mean 1, std speckle_contrast).
+enum class SpeckleModel {
+  Gaussian,  ///< 1 + contrast x a correlated Gaussian field, clamped at 0 (contrast < 1)
+  Gamma,     ///< gamma of shape k = 1 / contrast^2 (any real k >= 1); contrast 1: exponential
+             ///< intensity, fully developed speckle. A correlated Gaussian field mapped through
+             ///< the gamma quantile (Gaussian copula): exact marginal, any k, one field's cost.
+};
+
 /// Radiometry and noise of the camera. Intensities are fractions of the sensor's full scale.
 struct RenderConfig {
   double laser_peak = 0.9;  ///< sheet centre on albedo 1, facing the projector, at 0.5 m [FS]
   double ambient = 0.10;    ///< ambient light through the red filter on albedo 1 [FS]
+  SpeckleModel speckle_model = SpeckleModel::Gaussian;  ///< intensity distribution of speckle
   double speckle_contrast = 0.04;  ///< std / mean of the laser speckle per pixel [-]
   double speckle_grain = 0.8;      ///< speckle correlation length (Gaussian sigma) [px]
   double blur_sigma = 0.5;         ///< lens point spread function (Gaussian sigma) [px]
@@ -24,8 +33,12 @@ struct RenderConfig {
   double read_noise = 0.004;       ///< read noise [FS]
   int bit_depth = 8;               ///< 8 (CV_8U) or 16 (CV_16U)
   int supersample = 4;             ///< samples per pixel and axis near the slits [-]
-  bool noise = true;               ///< false: no speckle, shot or read noise (a noise-free image)
-  uint64_t seed = 1;               ///< the same seed and frame index give the same bytes
+  /// Factor on the sheet's width (projector.sheet_sigma) as rendered: focus. The sheet's power
+  /// is kept, so its peak scales by 1 / stripe_width; the ground truth does not change [-]
+  double stripe_width = 1.0;
+  double gamma = 1.0;  ///< output = value^(1 / gamma) before quantization; 1: linear [-]
+  bool noise = true;   ///< false: no speckle, shot or read noise (a noise-free image)
+  uint64_t seed = 1;   ///< the same seed and frame index give the same bytes
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -64,6 +77,7 @@ class Simulator {
  private:
   SensorGeometry geometry_;
   RenderConfig render_;
+  std::vector<float> gamma_quantiles_;  // SpeckleModel::Gamma: intensity per Gaussian quantile
 };
 
 /// Ground truth as CSV: slit,row,u,x,y,z (camera) ,wx,wy,wz (world),object,height.
