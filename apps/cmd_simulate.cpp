@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "common.h"
 
+#include "multislit/photometry.h"
 #include "multislit/scenarios.h"
 #include "multislit/simulator.h"
 
@@ -17,10 +18,19 @@
 namespace multislit::apps {
 namespace {
 
-std::string scenarioList() {
+std::string joined(const std::vector<std::string>& names) {
   std::string s;
-  for (const std::string& n : scenarioNames()) s += (s.empty() ? "" : ", ") + n;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
   return s;
+}
+
+// --photometry: a preset, "random" (drawn from --seed) or a photometry.yaml of an earlier run.
+Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
+  if (choice == "random") return randomPhotometry(seed);
+  const std::filesystem::path path(choice);
+  if (path.extension() == ".yaml" || path.extension() == ".yml")
+    return loadPhotometry(path.string());
+  return photometryPreset(choice);
 }
 
 }  // namespace
@@ -31,14 +41,18 @@ int runSimulate(int argc, char** argv) {
                       "sequence of a scenario, each image with its ground truth (CSV: for every\n"
                       "slit and row, the exact slit centre, 3D point, object and height).\n"
                       "Scenarios: " +
-                          scenarioList());
+                          joined(scenarioNames()) +
+                          "\nPhotometries (--photometry): " + joined(photometryPresetNames()) +
+                          ", random (drawn from --seed), or a photometry.yaml");
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor, data/sensor.yaml)");
   args.option("frames", "10", "number of sequence frames");
   args.option("fps", "30", "frame rate for the time stamps [Hz]");
-  args.option("seed", "1", "noise seed; the same seed gives the same bytes");
-  args.option("bit-depth", "8", "8 or 16 bits per pixel");
+  args.option("seed", "1",
+              "noise seed (and random photometry); the same seed gives the same bytes");
+  args.option("photometry", "", "preset, random or YAML: light, speckle, stripes, floor, objects");
+  args.option("bit-depth", "", "8 or 16 bits per pixel (default 8, or the photometry's)");
   args.option("tilt", "", "override the pose's theta [deg]");
   args.option("roll", "", "override the pose's phi [deg]");
   args.option("height", "", "override the pose's h [m]");
@@ -58,10 +72,19 @@ int runSimulate(int argc, char** argv) {
   if (args.has("step")) scenario.step = args.number("step");
   SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  RenderConfig render;
-  render.seed = static_cast<uint64_t>(args.integer("seed"));
-  render.bit_depth = static_cast<int>(args.integer("bit-depth"));
-  render.noise = !args.has("no-noise");
+  const auto seed = static_cast<uint64_t>(args.integer("seed"));
+  // Photometry: floor and object surfaces into the scene, the rest into the render config.
+  // Without --photometry the scene (and a --scene file) keeps its own surfaces.
+  Photometry photometry;
+  photometry.floor = scenario.scene.floor;
+  if (args.has("photometry")) {
+    photometry = choosePhotometry(args.str("photometry"), seed);
+    applyPhotometry(photometry, scenario.scene);
+  }
+  RenderConfig render = photometry.render;
+  render.seed = seed;
+  if (args.has("bit-depth")) render.bit_depth = static_cast<int>(args.integer("bit-depth"));
+  render.noise = render.noise && !args.has("no-noise");
   const long frames = args.integer("frames");
   const double fps = args.number("fps");
   if (frames < 0) throw cli::UsageError("--frames must be >= 0");
@@ -74,6 +97,9 @@ int runSimulate(int argc, char** argv) {
   used.mount = scenario.mount;
   used.save((out / "sensor.yaml").string());
   scenario.scene.save((out / "scene.yaml").string());
+  Photometry used_photometry = photometry;
+  used_photometry.render = render;
+  savePhotometry(used_photometry, (out / "photometry.yaml").string());
 
   const auto t0 = std::chrono::steady_clock::now();
   if (!args.has("no-reference")) {
@@ -114,6 +140,8 @@ int runSimulate(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const long images = frames + (args.has("no-reference") ? 0 : 1);
   std::cout << "scenario " << scenario.name << ": " << scenario.description << "\n"
+            << "photometry " << photometry.name << " (" << (out / "photometry.yaml").string()
+            << ")\n"
             << "wrote " << images << " images to " << out.string() << " ("
             << (images > 0 ? 1000.0 * seconds / static_cast<double>(images) : 0.0)
             << " ms per image)";

@@ -337,7 +337,8 @@ void Scene::validate() const {
     throw std::invalid_argument("scene: floor.texture_amplitude must be in [0, 1)");
   if (!(floor.texture_scale > 0))
     throw std::invalid_argument("scene: floor.texture_scale must be > 0");
-  if (!(floor.grout_width >= 0 && floor.grout_width < 0.5 * floor.texture_scale))
+  if (!(floor.grout_width >= 0 &&
+        (floor.texture != FloorTexture::Tiles || floor.grout_width < 0.5 * floor.texture_scale)))
     throw std::invalid_argument("scene: floor.grout_width must be in [0, texture_scale / 2)");
   if (!(floor.grout_albedo >= 0 && floor.grout_albedo <= 1))
     throw std::invalid_argument("scene: floor.grout_albedo must be in [0, 1]");

@@ -1,0 +1,47 @@
+// Photometric variety for the simulator: named presets and random draws of what real sensors and
+// floors give (laser power, ambient light, speckle, stripe width, blur, noise, gamma, bit depth,
+// floor texture and gloss, object surfaces). The ground truth never depends on any of it.
+#pragma once
+
+#include "multislit/scene.h"
+#include "multislit/simulator.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace multislit {
+
+/// Everything photometric about a simulated frame: the camera's rendering, the floor's surface
+/// and the objects' surfaces. Geometry (scene shapes, sensor, pose) is not part of it.
+struct Photometry {
+  std::string name = "default";      ///< preset name, or "random-<seed>"
+  RenderConfig render;               ///< laser, ambient, speckle, stripe width, blur, noise, gamma
+  FloorConfig floor;                 ///< texture, albedo, gloss, stripe width on the floor
+  double object_albedo = -1.0;       ///< every object's albedo; < 0 keeps each object's own [-]
+  double object_stripe_width = 1.0;  ///< every object's stripe width factor (SceneObject) [-]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// default (today's images), bright-room, dark-floor, saturated, narrow, defocus, speckle, tiles,
+/// carpet, glossy, 16bit, gamma, noisy, translucent-objects.
+std::vector<std::string> photometryPresetNames();
+/// A named preset; throws std::invalid_argument listing the known names.
+Photometry photometryPreset(const std::string& name);
+
+/// Every parameter drawn from the ranges of real sensors, floors and objects (see photometry.cpp),
+/// redrawn until the stripe on the floor's far rows stays measurable (a few times the noise above
+/// the background). Deterministic: the same seed gives the same photometry, render.seed = seed.
+Photometry randomPhotometry(uint64_t seed);
+
+/// Puts the floor and the object surfaces of `photometry` into `scene` (shapes untouched) and
+/// returns the render configuration to use with it.
+RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene);
+
+/// YAML (OpenCV FileStorage): every field, so that a run can be reproduced.
+void savePhotometry(const Photometry& photometry, const std::string& path);
+/// Reads savePhotometry()'s file; missing keys keep the defaults; the result is validated.
+Photometry loadPhotometry(const std::string& path);
+
+}  // namespace multislit
