@@ -37,7 +37,11 @@ std::uint64_t nowMicros() {
                                         .count());
 }
 
-bool waitFor(const std::function<bool()>& done, double ms) {
+// Polls `done` until it holds or `ms` passed. Deadlines are generous (a loaded 2-core machine,
+// sanitizers): the wait ends as soon as the event happens, so they cost nothing when all is well.
+constexpr double kDeadlineMs = 20000;
+
+bool waitFor(const std::function<bool()>& done, double ms = kDeadlineMs) {
   const auto t0 = Clock::now();
   while (!done() && msSince(t0) < ms) std::this_thread::sleep_for(milliseconds(5));
   return done();
@@ -200,7 +204,7 @@ TEST(MultiSlitGrabber, DeliversEveryFrameOfASourceThatWaitsInOrder) {
   };
   grabber.registerCallback(on_cloud);
   grabber.start();
-  EXPECT_TRUE(waitFor([&] { return !grabber.isRunning(); }, 10000));  // the source finished
+  EXPECT_TRUE(waitFor([&] { return !grabber.isRunning(); }));  // the source finished
   grabber.stop();
 
   ASSERT_EQ(clouds.size(), 12u);
@@ -239,12 +243,12 @@ TEST(MultiSlitGrabber, ComputesOnlyWhatIsConnected) {
   };
   grabber.registerCallback(on_frame);
   grabber.start();
-  EXPECT_TRUE(waitFor([&] { return frames >= 10; }, 5000));
+  EXPECT_TRUE(waitFor([&] { return frames >= 10; }));
   EXPECT_EQ(grabber.getStats().extraction_errors, 0u);  // no cloud slot: no extraction
 
   std::function<MultiSlitGrabber::sig_cb_rdmap> on_cloud = [](const RdmapPtr&) {};
   grabber.registerCallback(on_cloud);
-  EXPECT_TRUE(waitFor([&] { return grabber.getStats().extraction_errors >= 5; }, 5000));
+  EXPECT_TRUE(waitFor([&] { return grabber.getStats().extraction_errors >= 5; }));
   EXPECT_TRUE(grabber.isRunning());
   grabber.stop();
   EXPECT_GT(grabber.getStats().frames_processed, 10u);
@@ -263,18 +267,20 @@ TEST(MultiSlitGrabber, SlowCallbackDropsFramesWithBoundedMemory) {
   grabber.registerCallback(slow);
   const std::size_t rss_before = residentBytes();
   grabber.start();
-  std::this_thread::sleep_for(milliseconds(1500));
+  // 200 frames/s arrive, at most 20/s can be processed: ~1.5 s when the machine is idle.
+  EXPECT_TRUE(waitFor([&] { return grabber.getStats().frames_dropped > 100 && calls >= 10; }));
   grabber.stop();
   const std::size_t rss_after = residentBytes();
   const GrabberStats s = grabber.getStats();
-  EXPECT_GT(s.frames_dropped, 100u);  // ~300 frames arrive, ~30 are processed
-  EXPECT_LT(s.frames_processed, 40u);
+  EXPECT_GT(s.frames_dropped, 100u);
+  EXPECT_LT(s.frames_processed * 3, s.frames_received);  // ~1 in 10 at nominal rates
   EXPECT_EQ(s.frames_processed, static_cast<std::uint64_t>(calls));
   // One slot between the threads: nothing else can be waiting.
   EXPECT_LE(s.frames_received - s.frames_processed - s.frames_dropped, 1u);
   EXPECT_LT(rss_after, rss_before + (64u << 20));
-  EXPECT_GT(s.frames_per_second, 5.0);
-  EXPECT_LT(s.frames_per_second, 30.0);
+  // Each callback sleeps 50 ms: never more than 20 per second.
+  EXPECT_GT(s.frames_per_second, 0.0);
+  EXPECT_LE(s.frames_per_second, 21.0);
 }
 
 TEST(MultiSlitGrabber, StopFromInsideACallback) {
@@ -292,16 +298,16 @@ TEST(MultiSlitGrabber, StopFromInsideACallback) {
   };
   grabber.registerCallback(stopper);
   grabber.start();
-  ASSERT_TRUE(waitFor([&] { return stop_ms >= 0; }, 5000)) << "stop() from a callback deadlocked";
+  ASSERT_TRUE(waitFor([&] { return stop_ms >= 0; })) << "stop() from a callback deadlocked";
   EXPECT_LT(stop_ms, 1000.0);
   std::this_thread::sleep_for(milliseconds(200));
   EXPECT_EQ(calls, 1);
   EXPECT_FALSE(grabber.isRunning());
   // And it starts again.
   grabber.start();
-  EXPECT_TRUE(waitFor([&] { return calls >= 2; }, 5000));
+  EXPECT_TRUE(waitFor([&] { return calls >= 2; }));
   grabber.stop();
-  EXPECT_TRUE(waitFor([&] { return source->stops == source->starts; }, 2000));
+  EXPECT_TRUE(waitFor([&] { return source->stops == source->starts; }));
 }
 
 TEST(MultiSlitGrabber, HundredStartStopCycles) {
@@ -311,21 +317,25 @@ TEST(MultiSlitGrabber, HundredStartStopCycles) {
   std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
   grabber.registerCallback(count);
   double worst_stop_ms = 0;
-  const auto t0 = Clock::now();
   for (int cycle = 0; cycle < 100; ++cycle) {
+    const int before = clouds;
     grabber.start();
     EXPECT_TRUE(grabber.isRunning());
     std::this_thread::sleep_for(milliseconds(cycle % 3));
+    // Every tenth cycle stops only after a cloud went through: a loaded machine may deliver none
+    // within 0-2 ms, and stop() must also be quick while clouds flow.
+    if (cycle % 10 == 9) {
+      EXPECT_TRUE(waitFor([&] { return clouds > before; })) << "cycle " << cycle;
+    }
     const auto t = Clock::now();
     grabber.stop();
     worst_stop_ms = std::max(worst_stop_ms, msSince(t));
     EXPECT_FALSE(grabber.isRunning());
   }
   EXPECT_LT(worst_stop_ms, 1000.0);
-  EXPECT_LT(msSince(t0), 20000.0);
   EXPECT_EQ(source->starts, 100);
   EXPECT_EQ(source->stops, 100);
-  EXPECT_GT(clouds, 0);
+  EXPECT_GE(clouds, 10);
 }
 
 TEST(MultiSlitGrabber, SourceErrorsAreCountedNotThrown) {
@@ -336,7 +346,7 @@ TEST(MultiSlitGrabber, SourceErrorsAreCountedNotThrown) {
   std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
   grabber.registerCallback(count);
   grabber.start();
-  EXPECT_TRUE(waitFor([&] { return clouds >= 10; }, 5000));
+  EXPECT_TRUE(waitFor([&] { return clouds >= 10; }));
   grabber.stop();
   EXPECT_GT(grabber.getStats().source_errors, 3u);
 }
@@ -352,7 +362,7 @@ TEST(MultiSlitGrabber, StopReturnsWithinASecondWhenTheSourceHangs) {
   std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
   grabber->registerCallback(count);
   grabber->start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }, 5000));
+  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }));
   std::this_thread::sleep_for(milliseconds(100));  // now inside the hanging call
   auto t0 = Clock::now();
   grabber->stop();
@@ -368,7 +378,7 @@ TEST(MultiSlitGrabber, StopReturnsWithinASecondWhenTheSourceHangs) {
   // Destroyed while the source hangs: the destructor waits at most release_timeout_ms; the stuck
   // thread keeps what it uses alive until the call returns.
   grabber.reset();
-  EXPECT_TRUE(waitFor([&] { return weak.expired(); }, 5000));
+  EXPECT_TRUE(waitFor([&] { return weak.expired(); }));
 }
 
 TEST(MultiSlitGrabber, DestructionWhileRunningIsSafe) {
@@ -443,12 +453,10 @@ TEST(GigEVision, CloudsEqualExtractingTheServedImages) {
   grabber.registerCallback(on_xyz);
   grabber.registerCallback(on_frame);
   grabber.start();
-  EXPECT_TRUE(waitFor(
-      [&] {
-        std::lock_guard<std::mutex> lock(mutex);
-        return clouds.size() >= 8;
-      },
-      10000));
+  EXPECT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return clouds.size() >= 8;
+  }));
   grabber.stop();
 
   const Extractor extractor(sim.reference);
@@ -510,7 +518,7 @@ TEST(GigEVision, LostPacketsAreCountedAndSurvived) {
   };
   grabber.registerCallback(check);
   grabber.start();
-  std::this_thread::sleep_for(milliseconds(2500));
+  EXPECT_TRUE(waitFor([&] { return grabber.getStats().source.bad_buffers > 0 && clouds >= 3; }));
   grabber.stop();
   const GrabberStats s = grabber.getStats();
   std::printf("lost packets 0.3%%: %llu frames good, %llu bad buffers, %llu dropped (busy)\n",
@@ -533,7 +541,7 @@ TEST(GigEVision, StopWithinASecondWhenTheCameraStopsSendingOrGoesAway) {
 
   // 1. The camera answers but sends nothing.
   grabber.start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }, 10000));
+  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }));
   emulator->setLostPacketRatio(1.0);
   std::this_thread::sleep_for(milliseconds(500));
   auto t0 = Clock::now();
@@ -545,7 +553,7 @@ TEST(GigEVision, StopWithinASecondWhenTheCameraStopsSendingOrGoesAway) {
   emulator->setLostPacketRatio(0.0);
   const int before = clouds;
   grabber.start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= before + 3; }, 10000));
+  ASSERT_TRUE(waitFor([&] { return clouds >= before + 3; }));
   emulator.reset();
   std::this_thread::sleep_for(milliseconds(300));
   t0 = Clock::now();
@@ -567,8 +575,13 @@ TEST(GigEVision, StartStopCycles) {
   grabber.registerCallback(count);
   double worst_ms = 0;
   for (int cycle = 0; cycle < 10; ++cycle) {
+    const int before = clouds;
     grabber.start();
     std::this_thread::sleep_for(milliseconds(50 * (cycle % 3)));
+    // The last cycle stops only after a cloud came: opening a camera may take longer than 100 ms.
+    if (cycle == 9) {
+      EXPECT_TRUE(waitFor([&] { return clouds > before; }));
+    }
     const auto t0 = Clock::now();
     grabber.stop();
     worst_ms = std::max(worst_ms, msSince(t0));
@@ -596,10 +609,13 @@ TEST(GigEVision, FullSizeThroughputAndLatency) {
   };
   grabber.registerCallback(consume);
   grabber.start();
-  std::this_thread::sleep_for(milliseconds(1000));  // settle
+  // Settle (the first frames), then measure over at least 2 s and 20 processed frames.
+  EXPECT_TRUE(waitFor([&] { return grabber.getStats().frames_processed >= 10; }));
   const GrabberStats a = grabber.getStats();
   const auto t0 = Clock::now();
   std::this_thread::sleep_for(milliseconds(2000));
+  EXPECT_TRUE(
+      waitFor([&] { return grabber.getStats().frames_processed >= a.frames_processed + 20; }));
   const GrabberStats b = grabber.getStats();
   const double seconds = msSince(t0) / 1000;
   grabber.stop();
@@ -614,10 +630,12 @@ TEST(GigEVision, FullSizeThroughputAndLatency) {
   RecordProperty("received_fps", std::to_string(received));
   RecordProperty("latency_median_ms", std::to_string(b.latency_median_ms));
   RecordProperty("latency_p99_ms", std::to_string(b.latency_p99_ms));
+  // Speed is the benchmark's business; here only sanity: frames went through, and the latency
+  // is a real duration, not a mix-up of clocks (a generous bound for a loaded machine).
   EXPECT_EQ(backwards, 0);
-  EXPECT_GT(processed, 10.0);
+  EXPECT_GE(b.frames_processed, a.frames_processed + 20);
   EXPECT_GT(b.latency_median_ms, 0.0);
-  EXPECT_LT(b.latency_median_ms, 100.0);
+  EXPECT_LT(b.latency_median_ms, 2000.0);
 }
 
 }  // namespace
