@@ -18,10 +18,22 @@
 namespace multislit::apps {
 namespace {
 
-std::string joined(const std::vector<std::string>& names) {
+// The names separated by commas, a new line before a line grows past 78 characters.
+std::string joined(const std::vector<std::string>& names, std::size_t first_line = 0) {
   std::string s;
-  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  std::size_t line = first_line;
+  for (const std::string& n : names) {
+    const std::string sep = s.empty() ? "" : line + n.size() + 2 > 78 ? ",\n" : ", ";
+    line = sep == ",\n" ? n.size() : line + sep.size() + n.size();
+    s += sep + n;
+  }
   return s;
+}
+
+std::vector<std::string> photometryChoices() {
+  std::vector<std::string> names = photometryPresetNames();
+  names.push_back("random (drawn from --seed)");
+  return names;
 }
 
 // --photometry: a preset, "random" (drawn from --seed) or a photometry.yaml of an earlier run.
@@ -42,15 +54,16 @@ int runSimulate(int argc, char** argv) {
                       "slit and row, the exact slit centre, 3D point, object and height).\n"
                       "Scenarios: " +
                           joined(scenarioNames()) +
-                          "\nPhotometries (--photometry): " + joined(photometryPresetNames()) +
-                          ", random (drawn from --seed), or a photometry.yaml");
+                          "\nPhotometries (--photometry): " + joined(photometryChoices(), 29) +
+                          "\nor the photometry.yaml of an earlier run");
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor, data/sensor.yaml)");
   args.option("frames", "10", "number of sequence frames");
   args.option("fps", "30", "frame rate for the time stamps [Hz]");
-  args.option("seed", "1",
-              "noise seed (and random photometry); the same seed gives the same bytes");
+  args.option("seed", "",
+              "noise seed (and random photometry; default 1, or the photometry.yaml's); the "
+              "same seed gives the same bytes");
   args.option("photometry", "", "preset, random or YAML: light, speckle, stripes, floor, objects");
   args.option("bit-depth", "", "8 or 16 bits per pixel (default 8, or the photometry's)");
   args.option("tilt", "", "override the pose's theta [deg]");
@@ -72,7 +85,7 @@ int runSimulate(int argc, char** argv) {
   if (args.has("step")) scenario.step = args.number("step");
   SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  const auto seed = static_cast<uint64_t>(args.integer("seed"));
+  const auto seed = args.has("seed") ? static_cast<uint64_t>(args.integer("seed")) : 1u;
   // Photometry: floor and object surfaces into the scene, the rest into the render config.
   // Without --photometry the scene (and a --scene file) keeps its own surfaces.
   Photometry photometry;
@@ -82,7 +95,7 @@ int runSimulate(int argc, char** argv) {
     applyPhotometry(photometry, scenario.scene);
   }
   RenderConfig render = photometry.render;
-  render.seed = seed;
+  if (args.has("seed") || !args.has("photometry")) render.seed = seed;
   if (args.has("bit-depth")) render.bit_depth = static_cast<int>(args.integer("bit-depth"));
   render.noise = render.noise && !args.has("no-noise");
   const long frames = args.integer("frames");

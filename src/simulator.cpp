@@ -100,9 +100,9 @@ struct Shader {
     double offset = std::numeric_limits<double>::infinity();  // from the nearest sheet [rad]
     double t = 0;         // position along the slit (projector y / z)
     double albedo = 0;    // at 660 nm
-    double glare = 0;     // ambient mirrored by a glossy floor, relative to albedo 1
-    double sigma = 0;     // the sheet's width on this surface [rad]
     double radiance = 0;  // laser at the sheet's centre [FS]
+    float glare = 0;      // ambient mirrored by a glossy floor, relative to albedo 1
+    float width = 1;      // factor on the sheet's width on this surface
   };
 
   // `known_object` and `known_albedo` pass the pixel centre's albedo to its sub-samples: the
@@ -120,9 +120,8 @@ struct Shader {
     s.t = xy.y();
     const Eigen::Vector3d point_w = camera_centre + hit.distance * ray_w;
     s.albedo = hit.object == known_object ? known_albedo : scene.albedo(hit.object, point_w);
-    if (hit.object == 0) s.glare = scene.floorGlare(point_w, ray_w);
-    const double width = scene.stripeWidth(hit.object);
-    s.sigma = sigma * width;
+    if (hit.object == 0 && scene.floor.gloss > 0)
+      s.glare = static_cast<float>(scene.floorGlare(point_w, ray_w));
     if (std::abs(s.offset) > reach || std::abs(s.t) > geometry.slitTMax()) return s;
     const Eigen::Vector3d to_point = point_w - projector_centre;
     const double range = to_point.norm();
@@ -131,13 +130,16 @@ struct Shader {
     if (incidence <= 0) return s;
     if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return s;  // shadow
     // The sheet's power is kept when the surface widens it: its peak drops by the same factor.
+    const double width = scene.stripeWidth(hit.object);
+    s.width = static_cast<float>(width);
     s.radiance = render.laser_peak * s.albedo * incidence * (0.5 / range) * (0.5 / range) *
                  (scene.laserAlbedo(hit.object) / (render.stripe_width * width));
     return s;
   }
 
   double laser(const Sample& s) const {
-    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (s.sigma * s.sigma));
+    const double sheet = sigma * s.width;
+    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (sheet * sheet));
   }
 };
 
@@ -271,7 +273,7 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
         if (linear(r, c)) {
           const double gu = 0.5 * (at(r, c + 1).offset - at(r, c - 1).offset);
           const double gv = 0.5 * (at(r + 1, c).offset - at(r - 1, c).offset);
-          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, m.sigma);
+          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma * m.width);
         } else {
           for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)

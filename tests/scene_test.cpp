@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -98,4 +100,71 @@ TEST(Scenarios, TableIPosesAndNames) {
   for (const std::string& n : scenarioNames()) EXPECT_EQ(makeScenario(n).name, n);
   EXPECT_THROW(makeScenario("nothing"), std::invalid_argument);
   EXPECT_DOUBLE_EQ(makeScenario("fig8").mount.height, 0.495);
+}
+
+TEST(Scene, TilesHaveGroutLinesOfTheGivenWidthAndCarpetHasFineContrast) {
+  Scene scene;
+  scene.floor.texture = FloorTexture::Tiles;
+  scene.floor.texture_scale = 0.2;
+  scene.floor.grout_width = 0.004;
+  scene.floor.grout_albedo = 0.08;
+  scene.floor.texture_amplitude = 0.1;
+  // Along a line across the tiles (1 mm steps over 2 m): grout on 4 of every 200 mm.
+  int grout = 0, tile = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double a = scene.albedo(0, Eigen::Vector3d(i * 0.001, 0.1234, 0));
+    if (a == 0.08)
+      ++grout;
+    else if (a >= 0.55 * (1 - 0.1 - 0.03) && a <= 0.55 * (1 + 0.1 + 0.03))
+      ++tile;
+  }
+  EXPECT_NEAR(grout, 40, 10);  // 10 crossings x 4 samples (+ one line along the row, if hit)
+  EXPECT_EQ(grout + tile, 2000);
+  // Carpet: neighbouring millimetres differ by tens of percent.
+  scene.floor = FloorConfig{};
+  scene.floor.texture = FloorTexture::Carpet;
+  scene.floor.texture_scale = 0.0015;
+  scene.floor.texture_amplitude = 0.6;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const double a = scene.albedo(0, Eigen::Vector3d(i * 0.001, 0.5, 0));
+    sum += a;
+    sum2 += a * a;
+  }
+  const double mean = sum / 4000, contrast = std::sqrt(sum2 / 4000 - mean * mean) / mean;
+  EXPECT_NEAR(mean, 0.55, 0.03);
+  EXPECT_GT(contrast, 0.15);
+}
+
+TEST(Scene, SurfacePhotometryRoundTripsThroughYaml) {
+  Scenario s = makeScenario("ball");
+  s.scene.floor.texture = FloorTexture::Tiles;
+  s.scene.floor.texture_scale = 0.25;
+  s.scene.floor.gloss = 1.5;
+  s.scene.floor.laser_albedo = 0.4;
+  s.scene.floor.stripe_width = 1.3;
+  s.scene.objects[0].stripe_width = 2.0;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "multislit_scene_photometry.yaml").string();
+  s.scene.save(path);
+  const Scene back = Scene::load(path);
+  EXPECT_EQ(back.floor.texture, FloorTexture::Tiles);
+  EXPECT_DOUBLE_EQ(back.floor.texture_scale, 0.25);
+  EXPECT_DOUBLE_EQ(back.floor.gloss, 1.5);
+  EXPECT_DOUBLE_EQ(back.laserAlbedo(0), 0.4);
+  EXPECT_DOUBLE_EQ(back.stripeWidth(0), 1.3);
+  EXPECT_DOUBLE_EQ(back.stripeWidth(1), 2.0);
+  EXPECT_DOUBLE_EQ(back.laserAlbedo(1), 1.0);
+  // The glare: a bright spot on the floor where the lamp is mirrored, nothing elsewhere.
+  const Eigen::Vector3d camera(0.03, 0, 0.445);
+  double brightest = 0;
+  for (double x = 0.0; x < 1.5; x += 0.01) {
+    const Eigen::Vector3d p(x, 0.05, 0);
+    brightest = std::max(brightest, back.floorGlare(p, (p - camera).normalized()));
+  }
+  EXPECT_GT(brightest, 0.5 * 1.5);
+  EXPECT_EQ(back.floorGlare(Eigen::Vector3d(-2, 3, 0), Eigen::Vector3d(-0.6, 0.8, 0)), 0.0);
+  s.scene.objects[0].stripe_width = 9;
+  EXPECT_THROW(s.scene.validate(), std::invalid_argument);
+  std::filesystem::remove(path);
 }
