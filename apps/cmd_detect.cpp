@@ -5,39 +5,105 @@
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
+#include "multislit/obstacles.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
 namespace multislit::apps {
 namespace {
 
+/// A number, or null when it is not finite (JSON has no NaN or infinity).
+std::string jsonNumber(double value, const char* format) {
+  if (!std::isfinite(value)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, value);
+  return buf;
+}
+
+/// The points written as obstacle_points: those of the groups kept by the noise rule, or with
+/// `raw` every point off the plane. Sorted, as FloorResult::obstacles.
+pcl::Indices listedPoints(const FloorResult& floor, const ObstacleResult& groups, bool raw) {
+  if (raw) return floor.obstacles;
+  pcl::Indices points;
+  for (const Obstacle& o : groups.obstacles)
+    points.insert(points.end(), o.indices.begin(), o.indices.end());
+  std::sort(points.begin(), points.end());
+  return points;
+}
+
+// "groups": [{"points", "u", "v" (centroid), "u_min", "u_max", "v_min", "v_max"}, ...] in px,
+// the groups of obstacle points kept by the noise rule.
+void writeGroups(std::ostream& out, const pcl::PointCloud<PointRDM>& cloud,
+                 const ObstacleResult& groups) {
+  char buf[256];
+  out << ", \"groups\": [";
+  for (std::size_t g = 0; g < groups.obstacles.size(); ++g) {
+    const pcl::Indices& indices = groups.obstacles[g].indices;
+    double su = 0, sv = 0;
+    float u0 = cloud[static_cast<std::size_t>(indices[0])].u, u1 = u0;
+    float v0 = cloud[static_cast<std::size_t>(indices[0])].v, v1 = v0;
+    for (const auto i : indices) {
+      const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+      su += p.u;
+      sv += p.v;
+      u0 = std::min(u0, p.u), u1 = std::max(u1, p.u);
+      v0 = std::min(v0, p.v), v1 = std::max(v1, p.v);
+    }
+    const double n = static_cast<double>(indices.size());
+    std::snprintf(buf, sizeof buf,
+                  "%s{\"points\": %zu, \"u\": %.3f, \"v\": %.3f, \"u_min\": %.3f, \"u_max\": %.3f, "
+                  "\"v_min\": %.0f, \"v_max\": %.0f}",
+                  g ? ", " : "", indices.size(), su / n, sv / n, u0, u1, v0, v1);
+    out << buf;
+  }
+  out << "]";
+}
+
 // One line of the JSONL output. Keys "frame", "points", "found", "plane", "inliers",
 // "residual_std" and "obstacle_points" ([u, v, dk] in px) are read by other tools: keep them.
 void writeJsonLine(std::ostream& out, const std::string& frame,
-                   const pcl::PointCloud<PointRDM>& cloud, const FloorResult& r, double ms) {
+                   const pcl::PointCloud<PointRDM>& cloud, const FloorResult& r,
+                   const ObstacleResult& groups, bool raw, double ms) {
   char buf[256];
   out << "{\"frame\": " << jsonString(frame) << ", \"points\": " << r.valid_points
       << ", \"found\": " << (r.found ? "true" : "false");
   std::snprintf(buf, sizeof buf, ", \"plane\": [%.9g, %.9g, %.9g]", r.plane.x(), r.plane.y(),
                 r.plane.z());
-  out << (r.found ? buf : ", \"plane\": null") << ", \"inliers\": " << r.inliers.size();
-  if (r.found) {
-    std::snprintf(buf, sizeof buf, ", \"residual_std\": %.6f", r.residual_std);
-    out << buf;
-  } else {
-    out << ", \"residual_std\": null";
-  }
-  out << ", \"obstacle_count\": " << r.obstacles.size() << ", \"stamp_us\": " << cloud.header.stamp;
+  out << (r.found ? buf : ", \"plane\": null") << ", \"inliers\": " << r.inliers.size()
+      << ", \"residual_std\": " << (r.found ? jsonNumber(r.residual_std, "%.6f") : "null")
+      << ", \"sigma_px\": " << jsonNumber(r.sigma, "%.6f")
+      << ", \"sigma_estimate_px\": " << jsonNumber(r.sigma_estimate, "%.6f")
+      << ", \"threshold_px\": " << jsonNumber(r.threshold, "%.6f");
+  const pcl::Indices listed = listedPoints(r, groups, raw);
+  out << ", \"off_plane_count\": " << r.obstacles.size()
+      << ", \"obstacle_count\": " << listed.size()
+      << ", \"rejected_groups\": " << groups.rejected_groups
+      << ", \"stamp_us\": " << cloud.header.stamp;
   std::snprintf(buf, sizeof buf, ", \"time_ms\": %.3f", ms);
-  out << buf << ", \"obstacle_points\": [";
-  for (std::size_t i = 0; i < r.obstacles.size(); ++i) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(r.obstacles[i])];
+  out << buf;
+  writeGroups(out, cloud, groups);
+  out << ", \"obstacle_points\": [";
+  for (std::size_t i = 0; i < listed.size(); ++i) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(listed[i])];
     std::snprintf(buf, sizeof buf, "%s[%.3f, %.0f, %.4f]", i ? ", " : "", p.u, p.v, p.dk);
     out << buf;
   }
   out << "]}\n";
+}
+
+FloorDetectorConfig detectorConfig(const cli::ArgParser& args) {
+  FloorDetectorConfig fc;
+  fc.sigma = args.number("sigma");
+  fc.estimate_sigma = !args.has("fixed-sigma");
+  fc.min_sigma = args.number("min-sigma");
+  fc.max_sigma = args.number("max-sigma");
+  fc.threshold_sigmas = args.number("threshold-sigmas");
+  fc.max_iterations = static_cast<int>(args.integer("iterations"));
+  return fc;
 }
 
 }  // namespace
@@ -46,14 +112,27 @@ int runDetect(int argc, char** argv) {
   cli::ArgParser args(
       "detect",
       "Finds the floor in each frame's RDMap with RANSAC (eq. 1-3) and the points off it\n"
-      "(Sec. III-B). Writes one JSON object per frame and line: frame, points, found, plane\n"
-      "[A, B, C] of dk = A u + B v + C, inliers, residual_std [px], obstacle_count, stamp_us,\n"
-      "time_ms and obstacle_points [[u, v, dk], ...] (reference position and disparity, px).");
+      "(Sec. III-B). The threshold is 3 sigma, sigma measured in each frame's own floor residuals\n"
+      "(1.4826 x their median |residual|, clamped to [--min-sigma, --max-sigma]); off-plane "
+      "points\n"
+      "are grouped along slits and across adjacent slits, and groups of fewer than 3 points are\n"
+      "noise. Writes one JSON object per frame and line: frame, points, found, plane [A, B, C] of\n"
+      "dk = A u + B v + C, inliers, residual_std [px], sigma_px (the sigma used),\n"
+      "sigma_estimate_px (before clamping), threshold_px, off_plane_count (every point off the\n"
+      "plane), obstacle_count (points listed in obstacle_points), rejected_groups, stamp_us,\n"
+      "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max}, "
+      "...] (px) and\n"
+      "obstacle_points [[u, v, dk], ...] (reference position and disparity, px): the points of\n"
+      "the groups, or with --raw every point off the plane. null: not found or not measured.");
   addReferenceOptions(args);
   args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
-  args.option("sigma", "0.3", "sensor noise sigma [px]; the threshold is 3 sigma");
+  args.option("sigma", "0.3", "sensor noise sigma [px]: RANSAC's threshold is 3 sigma");
+  args.flag("fixed-sigma", "use --sigma for every frame instead of measuring each frame's");
+  args.option("min-sigma", "0.3", "lower bound of the measured sigma [px]");
+  args.option("max-sigma", "1.0", "upper bound of the measured sigma [px]");
   args.option("threshold-sigmas", "3", "floor / obstacle threshold in sigmas");
   args.option("iterations", "0", "RANSAC iterations; 0: from eq. (3) (35)");
+  args.flag("raw", "obstacle_points: every point off the plane, also groups below 3 points");
   args.option("out", "", "JSONL file to write (required)");
   args.positionals("FRAME...", "8- or 16-bit images", 1);
   if (!args.parse(argc, argv)) return 0;
@@ -62,17 +141,15 @@ int runDetect(int argc, char** argv) {
   ExtractorConfig ec;
   ec.estimator = parseEstimator(args.str("estimator"));
   const Extractor extractor(referenceFromArgs(args), ec);
-  FloorDetectorConfig fc;
-  fc.sigma = args.number("sigma");
-  fc.threshold_sigmas = args.number("threshold-sigmas");
-  fc.max_iterations = static_cast<int>(args.integer("iterations"));
-  const FloorDetector detector(fc);
+  const FloorDetector detector(detectorConfig(args));
+  const ObstacleClusterer clusterer;  // grid groups, at least 3 points
+  const bool raw = args.has("raw");
 
   std::ofstream out(args.str("out"));
   if (!out) throw std::runtime_error("cannot write '" + args.str("out") + "'");
   const std::vector<std::string>& frames = args.rest();
   cli::Progress progress(frames.size(), "detect");
-  std::size_t found = 0, obstacles = 0, points = 0;
+  std::size_t found = 0, obstacles = 0, off_plane = 0, points = 0;
   double total_ms = 0;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const cv::Mat image = readMonoImage(frames[i]);
@@ -86,10 +163,12 @@ int runDetect(int argc, char** argv) {
     const FloorResult r = detector.detect(cloud);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const ObstacleResult groups = clusterer.cluster(cloud, r, Eigen::Isometry3d::Identity());
     total_ms += ms;
-    writeJsonLine(out, frames[i], *cloud, r, ms);
+    writeJsonLine(out, frames[i], *cloud, r, groups, raw, ms);
     found += r.found;
-    obstacles += r.obstacles.size();
+    obstacles += raw ? r.obstacles.size() : groups.pointCount();
+    off_plane += r.obstacles.size();
     points += r.valid_points;
     progress.update(i + 1);
   }
@@ -97,10 +176,10 @@ int runDetect(int argc, char** argv) {
   if (!out) throw std::runtime_error("could not write '" + args.str("out") + "' completely");
   const double n = static_cast<double>(frames.size());
   std::printf(
-      "%zu frames: floor found in %zu, %.0f points and %.1f obstacle points per frame, "
-      "%.2f ms per frame (image to floor) -> %s\n",
-      frames.size(), found, static_cast<double>(points) / n, static_cast<double>(obstacles) / n,
-      total_ms / n, args.str("out").c_str());
+      "%zu frames: floor found in %zu, %.0f points, %.1f off the plane and %.1f obstacle points "
+      "per frame, %.2f ms per frame (image to floor) -> %s\n",
+      frames.size(), found, static_cast<double>(points) / n, static_cast<double>(off_plane) / n,
+      static_cast<double>(obstacles) / n, total_ms / n, args.str("out").c_str());
   return 0;
 }
 

@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace multislit {
 
@@ -112,6 +114,81 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   result.obstacle_residuals.shrink_to_fit();
 }
 
+/// |dk - (A u + B v + C)| of every valid point, in float like split().
+std::vector<float> absoluteResiduals(const pcl::PointCloud<PointRDM>& cloud,
+                                     const pcl::Indices& valid, const Eigen::Vector3d& plane) {
+  const float a = static_cast<float>(plane[0]), b = static_cast<float>(plane[1]),
+              c = static_cast<float>(plane[2]);
+  std::vector<float> r(valid.size());
+  for (std::size_t k = 0; k < valid.size(); ++k) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(valid[k])];
+    r[k] = std::abs(p.dk - (a * p.u + b * p.v + c));
+  }
+  return r;
+}
+
+/// The sigma of a zero-mean Gaussian whose |values| cut at `band` have the median `mad`: solves
+/// erf(mad / (sigma sqrt 2)) = erf(band / (sigma sqrt 2)) / 2 by bisection. Without the cut,
+/// sigma = 1.4826 mad; the cut makes the median smaller, so the root lies above that.
+/// Returns infinity when mad >= band / 2 (as uniform as the band allows, or wider).
+double sigmaFromCutMad(double mad, double band) {
+  if (!(mad < 0.5 * band)) return std::numeric_limits<double>::infinity();
+  if (mad <= 0.0) return 0.0;
+  const double sqrt2 = std::sqrt(2.0);
+  const auto median_share = [&](double sigma) {  // decreasing in sigma, from 1 to mad / band
+    return std::erf(mad / (sigma * sqrt2)) / std::erf(band / (sigma * sqrt2));
+  };
+  double lo = 1.4826 * mad, hi = lo;
+  while (median_share(hi) > 0.5) hi *= 2.0;
+  for (int i = 0; i < 50; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (median_share(mid) > 0.5 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/// Robust sigma of the |residuals| within `band`: the median, corrected for the cut. Reorders
+/// `abs_residuals`. NaN with fewer than 3 of them.
+double bandSigma(std::vector<float>& abs_residuals, double band) {
+  const auto end = std::partition(abs_residuals.begin(), abs_residuals.end(),
+                                  [&](float r) { return r <= band; });
+  const auto n = end - abs_residuals.begin();
+  if (n < 3) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = abs_residuals.begin() + n / 2;
+  std::nth_element(abs_residuals.begin(), mid, end);
+  return sigmaFromCutMad(*mid, band);
+}
+
+/// This frame's floor noise from its residuals about `plane`: first within band_sigmas *
+/// max_sigma, which leaves out the gross obstacles, then within band_sigmas times that first
+/// estimate, which leaves out most of a heavy tail. NaN when too few points lie near the plane.
+double estimateSigma(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid,
+                     const Eigen::Vector3d& plane, const FloorDetectorConfig& config) {
+  std::vector<float> r = absoluteResiduals(cloud, valid, plane);
+  const double wide = bandSigma(r, config.band_sigmas * config.max_sigma);
+  if (!std::isfinite(wide)) return wide;
+  const double narrow = bandSigma(r, config.band_sigmas * wide);
+  return std::isnan(narrow) ? wide : narrow;
+}
+
+/// The sigma and threshold of this frame into `result` (the configured sigma when estimate_sigma is
+/// false), and `fit` (eq. 2 with the configured threshold) refit on the points within the frame's
+/// threshold when that differs.
+void adoptFrameNoise(SampleConsensusModelRDMapPlane& model, const FloorDetectorConfig& config,
+                     RDMapPlaneFit& fit, FloorResult& result) {
+  result.sigma = config.sigma;
+  if (config.estimate_sigma) {
+    result.sigma_estimate =
+        estimateSigma(*model.getInputCloud(), *model.getIndices(), fit.plane, config);
+    if (!std::isnan(result.sigma_estimate))
+      result.sigma = std::clamp(result.sigma_estimate, config.min_sigma, config.max_sigma);
+  }
+  result.threshold = config.threshold_sigmas * result.sigma;
+  if (result.threshold == config.threshold()) return;
+  const RDMapPlaneFit refit = model.fitWithinDistance(fit.plane.cast<float>(), result.threshold);
+  if (refit.ok) fit = refit;
+}
+
 FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetectorConfig& config,
                        int q) {
   FloorResult result;
@@ -120,20 +197,23 @@ FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetecto
   if (result.valid_points < static_cast<std::size_t>(config.min_points)) return result;
   model.setSeed(config.seed);
 
-  // 1. RANSAC with q iterations (eq. 3) and the threshold 3 sigma.
+  // 1. RANSAC with q iterations (eq. 3) and the configured threshold, 3 sigma.
   Eigen::VectorXf best;
   if (!ransac(model, q, config.threshold(), config.local_refit, best, result.iterations))
     return result;
 
   // 2. eq. (2): least-squares refit on the inliers of the best plane.
-  const RDMapPlaneFit fit = model.fitWithinDistance(best, config.threshold());
+  RDMapPlaneFit fit = model.fitWithinDistance(best, config.threshold());
   if (!fit.ok) return result;
+
+  // 3. This frame's noise and threshold; eq. (2) again on the points within that threshold.
+  adoptFrameNoise(model, config, fit, result);
   result.plane = fit.plane;
 
-  // 3. Floor or obstacle, for every valid point, against the refit plane.
-  split(*model.getInputCloud(), valid, config.threshold(), result);
+  // 4. Floor or obstacle, for every valid point, against the refit plane.
+  split(*model.getInputCloud(), valid, result.threshold, result);
 
-  // 4. Fail safe: a plane carrying too few of the points is no floor.
+  // 5. Fail safe: a plane carrying too few of the points is no floor.
   if (static_cast<double>(result.inliers.size()) <
       config.min_inlier_ratio * static_cast<double>(result.valid_points)) {
     FloorResult not_found;
@@ -167,6 +247,10 @@ void FloorDetectorConfig::validate() const {
   require(sigma > 0.0 && std::isfinite(sigma), "sigma", "must be > 0 [px]");
   require(threshold_sigmas > 0.0 && std::isfinite(threshold_sigmas), "threshold_sigmas",
           "must be > 0");
+  require(min_sigma > 0.0 && std::isfinite(min_sigma), "min_sigma", "must be > 0 [px]");
+  require(max_sigma >= min_sigma && std::isfinite(max_sigma), "max_sigma",
+          "must be >= min_sigma [px]");
+  require(band_sigmas > 0.0 && std::isfinite(band_sigmas), "band_sigmas", "must be > 0");
   require(probability > 0.0 && probability < 1.0, "probability", "must be in (0, 1)");
   require(outlier_ratio >= 0.0 && outlier_ratio < 1.0, "outlier_ratio", "must be in [0, 1)");
   require(max_iterations >= 0, "max_iterations", "must be >= 0 (0: from eq. 3)");

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <random>
@@ -34,16 +35,30 @@ struct Scene {
   std::vector<double> offset;
 };
 
+/// The noise of a synthetic RDMap: N(0, sigma), and with probability tail_share a Laplace
+/// deviate of scale tail_scale instead (a heavy tail: speckle, another laser).
+struct Noise {
+  double sigma = kSigma;    ///< [px]
+  double tail_share = 0.0;  ///< [-]
+  double tail_scale = 0.0;  ///< Laplace scale b, std b sqrt 2 [px]
+};
+
 // 15 slits x 300 samples, one per image row, tilted 20 deg from the image rows like the real
 // sensor (u = 300 .. 1122 px, v = 50 .. 937 px), dk = A u + B v + C + offset + N(0, 0.3 px), 3 %
 // unmeasured (NaN). Obstacles: a 'cable' band across all slits (+2 px, u in [700, 712]) and a
 // 'ball' (a cap up to +12 px, 80 px radius).
-Scene makeScene(unsigned seed, bool obstacles) {
+Scene makeScene(unsigned seed, bool obstacles, const Noise& model = {}) {
   Scene scene{std::make_shared<Cloud>(kSamples, kSlits), {}};
   scene.offset.assign(scene.cloud->size(), 0.0);
   std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, kSigma);
+  std::normal_distribution<double> gauss(0.0, model.sigma);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::exponential_distribution<double> laplace(1.0 / std::max(model.tail_scale, 1e-9));
+  const auto noise = [&](std::mt19937& g) {
+    if (model.tail_share > 0.0 && unit(g) < model.tail_share)
+      return (unit(g) < 0.5 ? -1.0 : 1.0) * laplace(g);
+    return gauss(g);
+  };
   for (int s = 0; s < kSlits; ++s) {
     for (int j = 0; j < kSamples; ++j) {
       PointRDM& p = scene.cloud->at(j, s);
@@ -120,6 +135,9 @@ TEST(FloorDetector, ValidateNamesTheField) {
   EXPECT_NE(message([](auto& c) { c.min_points = 2; }).find("min_points"), std::string::npos);
   EXPECT_NE(message([](auto& c) { c.min_inlier_ratio = 1.5; }).find("min_inlier_ratio"),
             std::string::npos);
+  EXPECT_NE(message([](auto& c) { c.min_sigma = 0.0; }).find("min_sigma"), std::string::npos);
+  EXPECT_NE(message([](auto& c) { c.max_sigma = 0.2; }).find("max_sigma"), std::string::npos);
+  EXPECT_NE(message([](auto& c) { c.band_sigmas = 0.0; }).find("band_sigmas"), std::string::npos);
   FloorDetectorConfig bad;
   bad.sigma = -0.3;
   EXPECT_THROW(FloorDetector{bad}, std::invalid_argument);
@@ -185,6 +203,104 @@ TEST(FloorDetector, FalseObstaclesOnAPureNoisyFloorStayBelowHalfAPercent) {
   }
   // 3 sigma leaves 0.27 % of a Gaussian outside.
   EXPECT_NEAR(static_cast<double>(false_obstacles) / static_cast<double>(valid), 0.0027, 0.0012);
+}
+
+namespace {
+
+/// Share of the true floor points of `scene` that `result` calls obstacles.
+double falseObstacleShare(const Scene& scene, const FloorResult& result) {
+  std::size_t floor = 0, wrong = 0;
+  for (std::size_t i = 0; i < scene.cloud->size(); ++i)
+    floor += isValidRDMPoint((*scene.cloud)[i]) && scene.offset[i] == 0.0;
+  for (const auto i : result.obstacles) wrong += scene.offset[i] == 0.0;
+  return static_cast<double>(wrong) / static_cast<double>(floor);
+}
+
+}  // namespace
+
+TEST(FloorDetector, EstimatesEachFramesSigmaAndTheThresholdFollows) {
+  FloorDetectorConfig wide_bounds;  // to see the estimate itself below the default min_sigma
+  wide_bounds.min_sigma = 0.05;
+  for (const double sigma : {0.15, 0.3, 0.6}) {
+    for (unsigned seed = 40; seed < 43; ++seed) {
+      const Scene scene = makeScene(seed, true, Noise{sigma});
+      const FloorResult r = FloorDetector{wide_bounds}.detect(scene.cloud);
+      ASSERT_TRUE(r.found) << sigma;
+      EXPECT_NEAR(r.sigma_estimate, sigma, 0.07 * sigma) << "seed " << seed;
+      EXPECT_EQ(r.sigma, r.sigma_estimate);
+      EXPECT_DOUBLE_EQ(r.threshold, 3.0 * r.sigma);
+      // The split follows: 0.27 % of a Gaussian floor lies beyond 3 sigma, at every sigma.
+      EXPECT_LT(falseObstacleShare(scene, r), 0.006) << sigma;
+      std::printf("sigma %.2f px, seed %u: estimated %.4f px, false obstacles %.3f %%\n", sigma,
+                  seed, r.sigma_estimate, 100.0 * falseObstacleShare(scene, r));
+    }
+  }
+}
+
+TEST(FloorDetector, EstimatedSigmaIsClampedToTheConfiguredBounds) {
+  const FloorDetectorConfig config;  // [0.3, 1.0] px
+  const FloorResult low = FloorDetector{config}.detect(makeScene(44, true, Noise{0.15}).cloud);
+  ASSERT_TRUE(low.found);
+  EXPECT_NEAR(low.sigma_estimate, 0.15, 0.015);
+  EXPECT_EQ(low.sigma, config.min_sigma);  // the paper's 0.9 px is the smallest threshold
+  EXPECT_DOUBLE_EQ(low.threshold, 0.9);
+  const FloorResult high = FloorDetector{config}.detect(makeScene(45, true, Noise{1.5}).cloud);
+  ASSERT_TRUE(high.found);
+  EXPECT_GT(high.sigma_estimate, config.max_sigma);
+  EXPECT_EQ(high.sigma, config.max_sigma);
+  EXPECT_DOUBLE_EQ(high.threshold, 3.0);
+}
+
+TEST(FloorDetector, NoisyFrameGetsAWiderThresholdThanTheFixedOne) {
+  // 0.6 px of noise: the paper's fixed 0.9 px (1.5 sigma) calls 13 % of the floor obstacles.
+  const Scene scene = makeScene(46, true, Noise{0.6});
+  FloorDetectorConfig fixed;
+  fixed.estimate_sigma = false;
+  const FloorResult before = FloorDetector{fixed}.detect(scene.cloud);
+  const FloorResult after = FloorDetector{}.detect(scene.cloud);
+  ASSERT_TRUE(before.found);
+  ASSERT_TRUE(after.found);
+  EXPECT_EQ(before.sigma, 0.3);
+  EXPECT_DOUBLE_EQ(before.threshold, 0.9);
+  EXPECT_TRUE(std::isnan(before.sigma_estimate));
+  EXPECT_NEAR(falseObstacleShare(scene, before), 0.134, 0.02);
+  EXPECT_NEAR(after.threshold, 1.8, 0.09);
+  EXPECT_LT(falseObstacleShare(scene, after), 0.006);
+  // The ball's points well above the threshold are all still obstacles.
+  std::size_t high = 0, found_high = 0;
+  for (std::size_t i = 0; i < scene.cloud->size(); ++i)
+    high += isValidRDMPoint((*scene.cloud)[i]) && scene.offset[i] > 4.0;
+  for (const auto i : after.obstacles) found_high += scene.offset[i] > 4.0;
+  EXPECT_GT(high, 100u);
+  EXPECT_EQ(found_high, high);
+  std::printf("0.6 px noise: false obstacles %.2f %% at the fixed 0.9 px, %.3f %% at %.3f px\n",
+              100.0 * falseObstacleShare(scene, before), 100.0 * falseObstacleShare(scene, after),
+              after.threshold);
+}
+
+TEST(FloorDetector, HeavyTailedNoiseKeepsTheEstimateNearTheCoreSigma) {
+  // 85 % N(0, 0.4 px) and 15 % Laplace of scale 1 px (std 1.41 px): the RMS of all residuals
+  // within 3 px is far above the core's 0.4 px; the median-based estimate is not.
+  const Noise heavy{0.4, 0.15, 1.0};
+  for (unsigned seed = 50; seed < 53; ++seed) {
+    const Scene scene = makeScene(seed, false, heavy);
+    const FloorResult r = FloorDetector{}.detect(scene.cloud);
+    ASSERT_TRUE(r.found);
+    double sum_sq = 0.0;
+    std::size_t n = 0;
+    for (const auto& p : *scene.cloud) {
+      if (!isValidRDMPoint(p)) continue;
+      const double residual = p.dk - kTruth.dot(Eigen::Vector3d(p.u, p.v, 1.0));
+      if (std::abs(residual) > 3.0) continue;
+      sum_sq += residual * residual;
+      ++n;
+    }
+    const double rms = std::sqrt(sum_sq / static_cast<double>(n));
+    EXPECT_GT(rms, 1.3 * heavy.sigma);
+    EXPECT_NEAR(r.sigma, heavy.sigma, 0.12 * heavy.sigma) << "seed " << seed;
+    std::printf("heavy tail, seed %u: RMS within 3 px %.3f px, estimated sigma %.4f px\n", seed,
+                rms, r.sigma_estimate);
+  }
 }
 
 TEST(FloorDetector, DeterministicForASeed) {

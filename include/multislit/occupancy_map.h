@@ -28,9 +28,9 @@ namespace multislit {
 /// - hit: the voxel holds points of an obstacle (ObstacleResult::obstacles);
 /// - weak hit: the floor-layer voxel (0 <= z < resolution) holds at least min_weak_points points
 ///   whose residual above the RDMap plane is at least weak_sigmas times their slit's measured
-///   floor noise in this frame, while below the obstacle threshold (3 sigma of the paper's 0.3 px),
-///   and that lie at least weak_end_margin points from their slit's ends; the points of groups
-///   rejected as noise count as weak points too;
+///   floor noise in this frame, while below the frame's obstacle threshold
+///   (FloorResult::threshold), and that lie at least weak_end_margin points from their slit's ends;
+///   the points of groups rejected as noise count as weak points too;
 /// - miss: the floor-layer voxel holds only floor points and no weak point, or a cell above the
 ///   floor layer lies on the light ray of a floor point below free_height (the projector lit the
 ///   floor through it); a voxel with fewer weak points than min_weak_points is not updated.

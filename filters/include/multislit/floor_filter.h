@@ -28,7 +28,9 @@ class FloorFilter : public pcl::FilterIndices<PointRDM> {
 
   explicit FloorFilter(bool extract_removed_indices = false);
 
-  /// Standard deviation of the relative disparity [px]; the threshold is threshold_sigmas * sigma.
+  /// Standard deviation of the relative disparity [px]: RANSAC's threshold is threshold_sigmas *
+  /// sigma; the split uses each input's own measured sigma unless the config's estimate_sigma is
+  /// false (getResult().sigma and .threshold: the ones used).
   void setSigma(double sigma);
   double getSigma() const { return config_.sigma; }
   /// Floor / obstacle threshold in sigmas [-] (default 3).
