@@ -6,9 +6,12 @@
 #include "rdm_simd.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -114,17 +117,29 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   result.obstacle_residuals.shrink_to_fit();
 }
 
-/// |dk - (A u + B v + C)| of every valid point, in float like split().
-std::vector<float> absoluteResiduals(const pcl::PointCloud<PointRDM>& cloud,
-                                     const pcl::Indices& valid, const Eigen::Vector3d& plane) {
+/// |dk - (A u + B v + C)| of the valid points below `band`, counted in kBins equal bins: the
+/// medians below any cut come from it without sorting. The estimate adds 12 to 19 us to the
+/// 36 to 42 us of a 4476-point rendered frame's detect(); two nth_element passes added 50 to 60.
+struct ResidualHistogram {
+  static constexpr std::size_t kBins = 4096;  // 0.73e-3 px wide for the default 3 px band
+  double width = 0.0;                         ///< [px]
+  std::array<std::uint32_t, kBins> counts{};
+};
+
+ResidualHistogram residualHistogram(const pcl::PointCloud<PointRDM>& cloud,
+                                    const pcl::Indices& valid, const Eigen::Vector3d& plane,
+                                    double band) {
+  ResidualHistogram h;
+  h.width = band / static_cast<double>(ResidualHistogram::kBins);
   const float a = static_cast<float>(plane[0]), b = static_cast<float>(plane[1]),
-              c = static_cast<float>(plane[2]);
-  std::vector<float> r(valid.size());
-  for (std::size_t k = 0; k < valid.size(); ++k) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(valid[k])];
-    r[k] = std::abs(p.dk - (a * p.u + b * p.v + c));
+              c = static_cast<float>(plane[2]), scale = static_cast<float>(1.0 / h.width);
+  for (const auto i : valid) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    const float bin = std::abs(p.dk - (a * p.u + b * p.v + c)) * scale;  // float like split()
+    if (bin < static_cast<float>(ResidualHistogram::kBins))
+      ++h.counts[static_cast<std::size_t>(bin)];
   }
-  return r;
+  return h;
 }
 
 /// The sigma of a zero-mean Gaussian whose |values| cut at `band` have the median `mad`: solves
@@ -139,24 +154,28 @@ double sigmaFromCutMad(double mad, double band) {
     return std::erf(mad / (sigma * sqrt2)) / std::erf(band / (sigma * sqrt2));
   };
   double lo = 1.4826 * mad, hi = lo;
+  if (median_share(lo) < 0.5 + 1e-9) return lo;  // the cut is too far out to matter
   while (median_share(hi) > 0.5) hi *= 2.0;
-  for (int i = 0; i < 50; ++i) {
+  for (int i = 0; i < 40; ++i) {  // to 1e-12 of sigma
     const double mid = 0.5 * (lo + hi);
     (median_share(mid) > 0.5 ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
 }
 
-/// Robust sigma of the |residuals| within `band`: the median, corrected for the cut. Reorders
-/// `abs_residuals`. NaN with fewer than 3 of them.
-double bandSigma(std::vector<float>& abs_residuals, double band) {
-  const auto end = std::partition(abs_residuals.begin(), abs_residuals.end(),
-                                  [&](float r) { return r <= band; });
-  const auto n = end - abs_residuals.begin();
-  if (n < 3) return std::numeric_limits<double>::quiet_NaN();
-  const auto mid = abs_residuals.begin() + n / 2;
-  std::nth_element(abs_residuals.begin(), mid, end);
-  return sigmaFromCutMad(*mid, band);
+/// Robust sigma of the |residuals| below `cut` (taken down to a bin edge): their median,
+/// interpolated within its bin, corrected for the cut. NaN with fewer than 3 of them.
+double bandSigma(const ResidualHistogram& h, double cut) {
+  const std::size_t bins =
+      std::min(ResidualHistogram::kBins, static_cast<std::size_t>(cut / h.width));
+  const auto total = static_cast<double>(std::accumulate(
+      h.counts.begin(), h.counts.begin() + static_cast<std::ptrdiff_t>(bins), std::uint64_t{0}));
+  if (total < 3.0) return std::numeric_limits<double>::quiet_NaN();
+  double below = 0.0;
+  std::size_t k = 0;
+  while (below + h.counts[k] < 0.5 * total) below += h.counts[k++];
+  const double median = (static_cast<double>(k) + (0.5 * total - below) / h.counts[k]) * h.width;
+  return sigmaFromCutMad(median, static_cast<double>(bins) * h.width);
 }
 
 /// This frame's floor noise from its residuals about `plane`: first within band_sigmas *
@@ -164,10 +183,11 @@ double bandSigma(std::vector<float>& abs_residuals, double band) {
 /// estimate, which leaves out most of a heavy tail. NaN when too few points lie near the plane.
 double estimateSigma(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid,
                      const Eigen::Vector3d& plane, const FloorDetectorConfig& config) {
-  std::vector<float> r = absoluteResiduals(cloud, valid, plane);
-  const double wide = bandSigma(r, config.band_sigmas * config.max_sigma);
+  const double band = config.band_sigmas * config.max_sigma;
+  const ResidualHistogram h = residualHistogram(cloud, valid, plane, band);
+  const double wide = bandSigma(h, band);
   if (!std::isfinite(wide)) return wide;
-  const double narrow = bandSigma(r, config.band_sigmas * wide);
+  const double narrow = bandSigma(h, std::min(band, config.band_sigmas * wide));
   return std::isnan(narrow) ? wide : narrow;
 }
 

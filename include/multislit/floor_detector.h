@@ -35,7 +35,7 @@ struct FloorDetectorConfig {
   /// max_sigma]. The split into floor and obstacles and the refit (eq. 2) then use threshold_sigmas
   /// x that sigma. false: the paper's fixed sigma for every frame.
   bool estimate_sigma = true;
-  /// Lower bound of the estimated sigma. Rendered bare floors of the simulator measure 0.107 to
+  /// Lower bound of the estimated sigma. Rendered bare floors of the simulator measure 0.108 to
   /// 0.129 px (7 Table I poses x 4 frames), but their residuals are heavier-tailed than a Gaussian
   /// and correlated along a slit: with no bound (threshold about 0.35 px) those 28 frames give 919
   /// off-plane points of 125 k (0.73 %, a Gaussian gives 0.27 %) and 572 of them in groups of 3 or
@@ -82,7 +82,8 @@ struct FloorResult {
   /// The floor / obstacle threshold used: threshold_sigmas * sigma. NaN: not found. [px]
   double threshold = std::numeric_limits<double>::quiet_NaN();
   /// The robust estimate of the floor noise before clamping (1.4826 MAD, corrected for the band);
-  /// NaN when estimate_sigma is false or the floor was not found. [px]
+  /// NaN when estimate_sigma is false or the floor was not found, +infinity when the residuals
+  /// fill the band as evenly as a uniform spread or more (then sigma = max_sigma). [px]
   double sigma_estimate = std::numeric_limits<double>::quiet_NaN();
   std::size_t valid_points = 0;  ///< points with finite u, v and dk
   int iterations = 0;            ///< RANSAC iterations run
