@@ -108,6 +108,12 @@ double windowedCentroid(const T* row, int lo, int hi, double start, const Backgr
   return centre;
 }
 
+/// Added to the half-contrast and fit thresholds in every path: background-free values are
+/// rationals of small denominators (thirds, fifths, 2 hw + 4), so a pixel can lie exactly on a
+/// threshold, where float and double rounding would decide it differently. Off by this, a tie is
+/// out in both, and no pixel lies within float rounding of the threshold [DN].
+constexpr double kTieBreak = 1.0 / 1024;
+
 /// Pixels above half the contrast (the profile's width), counted in the pass that gathers
 /// the sums of Caruana's fit when `fit` is set.
 struct ProfilePass {
@@ -250,9 +256,10 @@ bool measurePeakAt(const T* row, int columns, int top, const ProfileParams& p, P
   const double contrast = row[top] - bg(top);
   if (contrast < p.min_contrast) return false;
   const int first = std::max(lo, 0), last = std::min(hi, columns - 1);
-  const double floor = p.fit_threshold * contrast;
+  const double floor = p.fit_threshold * contrast + kTieBreak;
   const bool fit = !saturated && p.estimator == Estimator::Gaussian;
-  const ProfilePass pass = profilePass(row, first, last, top, bg, 0.5 * contrast, floor, fit);
+  const ProfilePass pass =
+      profilePass(row, first, last, top, bg, 0.5 * contrast + kTieBreak, floor, fit);
   if (pass.width < p.min_width || pass.width > p.max_width) return false;
 
   double centre = 0;
@@ -355,7 +362,7 @@ __attribute__((target("avx2"))) FourProfiles fourProfiles(const T* const rows[4]
       (_mm256_load_pd(right) / 3.0 - at_left) / ((x_lo + 2.0 * hw + 2.0) - x_left);
   const __m256d x_top = x_lo + static_cast<double>(hw);
   const __m256d contrast = _mm256_load_pd(peak) - (at_left + slope * (x_top - x_left));
-  const __m256d half = 0.5 * contrast, floor = p.fit_threshold * contrast;
+  const __m256d half = 0.5 * contrast + kTieBreak, floor = p.fit_threshold * contrast + kTieBreak;
   const __m256d one = _mm256_set1_pd(1.0);
   __m256i width = _mm256_setzero_si256(), used = width;
   __m256d s0 = _mm256_setzero_pd(), s1 = s0, s2 = s0, s3 = s0, s4 = s0, r0 = s0, r1 = s0, r2 = s0;
@@ -592,7 +599,9 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
   const __m256 slope = (right - at_left) / static_cast<float>(2 * hw + 4);
   const __m256 at_top = _mm256_fmadd_ps(slope, _mm256_set1_ps(static_cast<float>(hw + 2)), at_left);
   const __m256 contrast = columnOf(columns, hw + 3) - at_top;
-  const __m256 half = 0.5f * contrast, floor = static_cast<float>(p.fit_threshold) * contrast;
+  const __m256 tie = _mm256_set1_ps(static_cast<float>(kTieBreak));
+  const __m256 half = 0.5f * contrast + tie,
+               floor = static_cast<float>(p.fit_threshold) * contrast + tie;
   __m256i width = _mm256_setzero_si256(), used = width;
   __m256 s0 = _mm256_setzero_ps(), s1 = s0, s2 = s0, s3 = s0, s4 = s0, r0 = s0, r1 = s0, r2 = s0;
   // Three passes over the window, none with a branch or a chain from one pixel to the next but

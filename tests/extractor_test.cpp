@@ -265,17 +265,15 @@ TEST(Extractor, DefaultEstimatorIsTheMeasuredBest) {
 // within float rounding, on the floor and on obstacles.
 TEST(Extractor, BatchedProfilesMatchTheScalarMeasure) {
   const Reference& ref = reference();
-  ProfileParams p;
-  p.min_contrast = ExtractorConfig{}.min_contrast * 255.0;
-  p.min_width = ExtractorConfig{}.min_width_factor * ref.profile_width;
-  p.max_width = ExtractorConfig{}.max_width_factor * ref.profile_width;
+  ProfileParams p = Extractor(ref).profileParams(CV_8U);
   std::size_t regions_seen = 0, found = 0, differ = 0;
   double worst = 0;
   const RenderedFrame frames[] = {renderScenario(makeScenario("cond3"), 4),
                                   renderScenario(makeScenario("cable"), 60)};
-  // The window of the extractor (11 px each side: one 32-byte load per profile), and a wider one
+  // The window of the extractor (12 px each side: one 32-byte load per profile), and wider ones
   // (two loads), as a sensor with finer pixels needs.
-  for (const int half_window : {static_cast<int>(std::lround(1.25 * ref.profile_width)), 20})
+  // 13: a window where pixels lay exactly on a threshold before kTieBreak.
+  for (const int half_window : {p.half_window, 13, 20})
     for (const RenderedFrame& f : frames) {
       p.half_window = half_window;
       std::vector<PeakRegion<std::uint8_t>> regions;
