@@ -17,8 +17,13 @@ int runCalibrate(int argc, char** argv) {
       "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
       "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
       "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
-      "axis) it is measured.");
-  args.option("reference", "", "reference image of a plane (required)");
+      "axis) it is measured. Several --reference images of the same plane from the same pose\n"
+      "are averaged first: speckle and noise weaken, slits broken in one frame join.\n"
+      "\n"
+      "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
+      "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
+      "    --reference f4.png --reference f5.png --sensor my_sensor.yaml --out calibration.yaml");
+  args.repeatable("reference", "reference image of a plane (required; repeat to average several)");
   args.option("sensor", "",
               "sensor YAML: camera intrinsics and the reference pose (default: the paper's)");
   args.repeatable("plane", "DEPTH:IMAGE, a wall at DEPTH metres");
@@ -29,7 +34,8 @@ int runCalibrate(int argc, char** argv) {
   args.option("camera-id", "", "name of the camera, checked when the calibration is used");
   args.option("out", "calibration.yaml", "calibration file to write");
   if (!args.parse(argc, argv)) return 0;
-  if (!args.has("reference")) throw cli::UsageError("--reference is required");
+  const std::vector<std::string> ref_paths = args.list("reference");
+  if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
@@ -38,11 +44,15 @@ int runCalibrate(int argc, char** argv) {
   rc.estimator = parseEstimator(args.str("estimator"));
   rc.min_contrast = args.number("min-contrast");
   rc.expected_slits = static_cast<int>(args.integer("slits"));
-  const std::string ref_path = args.str("reference");
+  std::vector<cv::Mat> ref_images;
+  for (const std::string& path : ref_paths) ref_images.push_back(readMonoImage(path));
+  const std::string ref_path =
+      ref_paths.front() +
+      (ref_paths.size() > 1 ? " (+" + std::to_string(ref_paths.size() - 1) + " averaged)" : "");
   Reference ref;
   try {
-    ref = Reference::fromImage(readMonoImage(ref_path), rc);
-  } catch (const std::runtime_error& e) {
+    ref = Reference::fromImages(ref_images, rc);
+  } catch (const std::exception& e) {
     throw std::runtime_error(ref_path + ": " + e.what());
   }
   ref.camera_id = args.str("camera-id");
@@ -74,7 +84,10 @@ int runCalibrate(int argc, char** argv) {
               static_cast<double>(ref.pointCount()) / static_cast<double>(ref.slits.size()));
   std::printf("  assigned region %d px (widest without overlap %d px), slit profile %.1f px wide\n",
               ref.region_width, ref.max_region_width, ref.profile_width);
-  std::printf("  slit smoothing rms %.3f px\n", ref.smoothing_rms);
+  std::printf(
+      "  slit smoothing rms %.3f px; %d slit pieces joined across gaps, %d tracks dropped "
+      "as not slits (speckle, texture)\n",
+      ref.smoothing_rms, ref.joined_pieces, ref.dropped_tracks);
   std::printf("  metric scale (%s): f * baseline = %.4f px m", ref.scale.source.c_str(),
               ref.scale.disparity_constant);
   if (!planes.empty()) std::printf(", fit rms %.3f px over %zu planes", fit_rms, planes.size());

@@ -1,5 +1,6 @@
 #include "multislit/reference.h"
 
+#include "slit_tracks.h"
 #include "yaml_io.h"
 
 #include <Eigen/Dense>
@@ -17,234 +18,7 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-struct Centre {
-  int row;
-  double u, width;
-};
-
-// A slit being followed down the image, row by row.
-struct Track {
-  std::vector<Centre> points;
-  double predict(int row) const {  // linear extrapolation over the last few rows
-    const Centre& b = points.back();
-    if (points.size() < 2) return b.u;
-    const Centre& a = points[points.size() - std::min<std::size_t>(points.size(), 8)];
-    if (a.row == b.row) return b.u;
-    return b.u + (b.u - a.u) / (b.row - a.row) * (row - b.row);
-  }
-};
-
-ProfileParams detectionParams(const cv::Mat& image, const ReferenceConfig& c) {
-  const double full = image.depth() == CV_8U ? 255.0 : 65535.0;
-  ProfileParams p;
-  p.estimator = c.estimator;
-  p.min_contrast = c.min_contrast * full;
-  p.saturation = full;
-  return p;
-}
-
-// 1. Every row: local maxima that stand out, measured to sub-pixel precision.
-template <typename T>
-std::vector<std::vector<Centre>> rowCentres(const cv::Mat& image, const ProfileParams& p) {
-  std::vector<std::vector<Centre>> rows(static_cast<std::size_t>(image.rows));
-  const int w = p.half_window, n = image.cols;
-  for (int r = 0; r < image.rows; ++r) {
-    const T* row = image.ptr<T>(r);
-    int last_kept = -1000;
-    double last_value = 0;
-    for (int x = 1; x + 1 < n; ++x) {
-      if (!(row[x] > row[x - 1] && row[x] >= row[x + 1])) continue;
-      const double base = std::min(row[std::max(0, x - w - 2)], row[std::min(n - 1, x + w + 2)]);
-      if (row[x] - base < p.min_contrast) continue;
-      Peak peak;
-      if (!measurePeakAt(row, n, x, p, &peak)) continue;
-      auto& out = rows[static_cast<std::size_t>(r)];
-      if (x - last_kept <= 2 * w && !out.empty()) {  // two maxima of one profile: keep the higher
-        if (row[x] <= last_value) continue;
-        out.pop_back();
-      }
-      out.push_back({r, peak.centre, peak.width});
-      last_kept = x;
-      last_value = row[x];
-    }
-  }
-  return rows;
-}
-
-// 2. Link centres of consecutive rows into tracks, then join tracks across gaps.
-std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int max_gap) {
-  constexpr double kTolerance = 4.0, kFirstStep = 15.0;  // [px]
-  std::vector<Track> open, done;
-  for (const auto& centres : rows) {
-    if (centres.empty()) continue;
-    const int row = centres.front().row;
-    std::vector<bool> used(centres.size(), false);
-    for (Track& t : open) {
-      const double tol = t.points.size() < 2 ? kFirstStep : kTolerance;
-      int best = -1;
-      double best_d = tol;
-      for (std::size_t k = 0; k < centres.size(); ++k) {
-        const double d = std::abs(centres[k].u - t.predict(row));
-        if (!used[k] && d < best_d) best = static_cast<int>(k), best_d = d;
-      }
-      if (best >= 0) {
-        t.points.push_back(centres[static_cast<std::size_t>(best)]);
-        used[static_cast<std::size_t>(best)] = true;
-      }
-    }
-    for (std::size_t k = 0; k < centres.size(); ++k)
-      if (!used[k]) open.push_back(Track{{centres[k]}});
-    // Close tracks that have not grown for longer than a gap.
-    for (auto it = open.begin(); it != open.end();) {
-      if (row - it->points.back().row > max_gap) {
-        done.push_back(std::move(*it));
-        it = open.erase(it);
-      } else {
-        ++it;
-      }
-    }
-  }
-  done.insert(done.end(), open.begin(), open.end());
-  return done;
-}
-
-// 3. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve.
-Eigen::VectorXd fitSlit(const std::vector<Centre>& pts, int degree, double mid, double half,
-                        std::vector<bool>* inlier) {
-  const int n = static_cast<int>(pts.size());
-  inlier->assign(pts.size(), true);
-  Eigen::VectorXd coef = Eigen::VectorXd::Zero(degree + 1);
-  for (int pass = 0; pass < 4; ++pass) {
-    Eigen::MatrixXd a(n, degree + 1);
-    Eigen::VectorXd b(n);
-    for (int i = 0; i < n; ++i) {
-      const double s = (pts[static_cast<std::size_t>(i)].row - mid) / half;
-      const double w = (*inlier)[static_cast<std::size_t>(i)] ? 1.0 : 0.0;
-      double p = 1;
-      for (int k = 0; k <= degree; ++k, p *= s) a(i, k) = w * p;
-      b(i) = w * pts[static_cast<std::size_t>(i)].u;
-    }
-    coef = a.colPivHouseholderQr().solve(b);
-    double ss = 0;
-    int m = 0;
-    std::vector<double> res(pts.size());
-    for (int i = 0; i < n; ++i) {
-      const double s = (pts[static_cast<std::size_t>(i)].row - mid) / half;
-      double p = 1, u = 0;
-      for (int k = 0; k <= degree; ++k, p *= s) u += coef(k) * p;
-      res[static_cast<std::size_t>(i)] = pts[static_cast<std::size_t>(i)].u - u;
-      if ((*inlier)[static_cast<std::size_t>(i)])
-        ss += res[static_cast<std::size_t>(i)] * res[static_cast<std::size_t>(i)], ++m;
-    }
-    const double limit = std::max(0.3, 3.0 * std::sqrt(ss / std::max(m, 1)));
-    for (int i = 0; i < n; ++i)
-      (*inlier)[static_cast<std::size_t>(i)] = std::abs(res[static_cast<std::size_t>(i)]) <= limit;
-  }
-  return coef;
-}
-
-struct DetectedSlits {
-  std::vector<ReferenceSlit> slits;
-  double profile_width = 0, smoothing_rms = 0;
-};
-
-std::string describe(const std::vector<Track>& tracks) {
-  std::ostringstream s;
-  for (std::size_t k = 0; k < tracks.size() && k < 20; ++k)
-    s << (k ? ", " : "") << "rows " << tracks[k].points.front().row << "-"
-      << tracks[k].points.back().row;
-  if (tracks.size() > 20) s << ", ...";
-  return s.str();
-}
-
-DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
-                          const std::string& what) {
-  const ProfileParams params = detectionParams(image, config);
-  const auto rows = image.depth() == CV_8U ? rowCentres<uint8_t>(image, params)
-                                           : rowCentres<uint16_t>(image, params);
-  std::vector<Track> tracks = linkTracks(rows, config.max_gap);
-  tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
-                              [&](const Track& t) {
-                                return static_cast<int>(t.points.size()) < config.min_rows;
-                              }),
-               tracks.end());
-  if (static_cast<int>(tracks.size()) != config.expected_slits) {
-    std::ostringstream msg;
-    msg << what << ": found " << tracks.size() << " slits, expected " << config.expected_slits;
-    if (!tracks.empty()) msg << " (" << describe(tracks) << ")";
-    if (tracks.empty()) msg << ": is the laser on, and is this an image of a plane?";
-    throw std::runtime_error(msg.str());
-  }
-  // Order the slits across their direction: the projector's fan runs down and to the right.
-  Eigen::Vector2d along = Eigen::Vector2d::Zero();
-  for (const Track& t : tracks)
-    along += Eigen::Vector2d(t.points.back().u - t.points.front().u,
-                             t.points.back().row - t.points.front().row);
-  Eigen::Vector2d normal(along.y(), -along.x());
-  if (normal.x() + normal.y() < 0) normal = -normal;
-  auto across = [&](const Track& t) {
-    const Centre& m = t.points[t.points.size() / 2];
-    return normal.dot(Eigen::Vector2d(m.u, m.row));
-  };
-  std::sort(tracks.begin(), tracks.end(),
-            [&](const Track& a, const Track& b) { return across(a) < across(b); });
-
-  DetectedSlits out;
-  std::vector<double> widths;
-  double ss = 0;
-  std::size_t m = 0;
-  for (const Track& t : tracks) {
-    ReferenceSlit slit;
-    slit.first_row = t.points.front().row;
-    const int last = t.points.back().row;
-    slit.u.assign(static_cast<std::size_t>(last - slit.first_row + 1), kNaN);
-    for (const Centre& c : t.points) widths.push_back(c.width);
-    if (config.smoothing_degree > 0) {
-      const double mid = 0.5 * (slit.first_row + last),
-                   half = std::max(1.0, 0.5 * (last - slit.first_row));
-      std::vector<bool> inlier;
-      const Eigen::VectorXd coef = fitSlit(t.points, config.smoothing_degree, mid, half, &inlier);
-      // Near its ends a slit is cut inside the row profile, which narrows the profile and pulls
-      // its centre inwards: such rows are dropped until the slit runs clean.
-      std::vector<double> w;
-      for (const Centre& c : t.points) w.push_back(c.width);
-      std::nth_element(w.begin(), w.begin() + static_cast<long>(w.size() / 2), w.end());
-      const double narrow = 0.85 * w[w.size() / 2];
-      auto clean = [&](std::size_t i) { return inlier[i] && t.points[i].width >= narrow; };
-      std::size_t begin = 0, end = t.points.size();
-      while (begin < end && !clean(begin)) ++begin;
-      while (end > begin && !clean(end - 1)) --end;
-      if (end - begin < static_cast<std::size_t>(config.min_rows)) continue;
-      slit.first_row = t.points[begin].row;
-      const int kept_last = t.points[end - 1].row;
-      slit.u.assign(static_cast<std::size_t>(kept_last - slit.first_row + 1), kNaN);
-      for (int r = slit.first_row; r <= kept_last; ++r) {
-        const double s = (r - mid) / half;
-        double p = 1, u = 0;
-        for (int k = 0; k <= config.smoothing_degree; ++k, p *= s) u += coef(k) * p;
-        slit.u[static_cast<std::size_t>(r - slit.first_row)] = static_cast<float>(u);
-      }
-      for (std::size_t i = begin; i < end; ++i) {
-        if (!inlier[i]) continue;
-        const double d =
-            t.points[i].u - slit.u[static_cast<std::size_t>(t.points[i].row - slit.first_row)];
-        ss += d * d;
-        ++m;
-      }
-    } else {
-      for (const Centre& c : t.points)
-        slit.u[static_cast<std::size_t>(c.row - slit.first_row)] = static_cast<float>(c.u);
-    }
-    out.slits.push_back(std::move(slit));
-  }
-  std::nth_element(widths.begin(), widths.begin() + static_cast<long>(widths.size() / 2),
-                   widths.end());
-  out.profile_width = widths[widths.size() / 2];
-  out.smoothing_rms = m ? std::sqrt(ss / static_cast<double>(m)) : 0.0;
-  return out;
-}
-
-// 4. The widest constant region that overlaps no neighbour on any row (Fig. 7).
+// The widest constant region that overlaps no neighbour on any row (Fig. 7).
 int widestRegion(const std::vector<ReferenceSlit>& slits, int image_height) {
   double min_gap = std::numeric_limits<double>::infinity();
   std::vector<float> on_row;
@@ -288,6 +62,8 @@ Reference Reference::fromImage(const cv::Mat& image, const ReferenceConfig& conf
   ref.slits = std::move(found.slits);
   ref.profile_width = found.profile_width;
   ref.smoothing_rms = found.smoothing_rms;
+  ref.joined_pieces = found.joined;
+  ref.dropped_tracks = found.dropped;
   ref.max_region_width = widestRegion(ref.slits, image.rows);
   if (ref.max_region_width < 3)
     throw std::runtime_error("reference image: the slits are too close for any assigned region");
@@ -297,6 +73,26 @@ Reference Reference::fromImage(const cv::Mat& image, const ReferenceConfig& conf
                                 std::to_string(ref.max_region_width) + " px");
   ref.region_width = config.region_width > 0 ? config.region_width : ref.max_region_width;
   return ref;
+}
+
+Reference Reference::fromImages(const std::vector<cv::Mat>& images, const ReferenceConfig& config) {
+  if (images.empty()) throw std::invalid_argument("reference: no image given");
+  if (images.size() == 1) return fromImage(images.front(), config);
+  const cv::Mat& first = images.front();
+  cv::Mat sum = cv::Mat::zeros(first.size(), CV_64F), f;
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const cv::Mat& image = images[k];
+    if (image.size() != first.size() || image.type() != first.type())
+      throw std::invalid_argument("reference image " + std::to_string(k + 1) +
+                                  ": size or type differs from the first image");
+    image.convertTo(f, CV_64F);
+    sum += f;
+  }
+  // The mean in 16-bit DN (8-bit images times 257): the averaging keeps its fractions.
+  const double to16 = first.depth() == CV_8U ? 257.0 : 1.0;
+  cv::Mat mean;
+  sum.convertTo(mean, CV_16U, to16 / static_cast<double>(images.size()));
+  return fromImage(mean, config);
 }
 
 std::size_t Reference::pointCount() const {

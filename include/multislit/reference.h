@@ -50,12 +50,18 @@ class Reference {
   int max_region_width = 0;               ///< the widest width that overlaps no neighbour [px]
   double profile_width = 0.0;             ///< median width of a slit across a row [px]
   double smoothing_rms = 0.0;             ///< rms of raw centres about the smoothed slits [px]
+  int joined_pieces = 0;                  ///< slit pieces joined across gaps when found [-]
+  int dropped_tracks = 0;                 ///< tracks found that were not slits (speckle) [-]
   std::vector<ReferenceSlit> slits;
   MetricScale scale;
 
   /// Finds the slits in an image of a plane (8- or 16-bit, one channel). Throws
   /// std::runtime_error saying what was found when the slits are not the expected ones.
   static Reference fromImage(const cv::Mat& image, const ReferenceConfig& config = {});
+  /// Same, from several images of the same plane taken from the same pose (all of one size and
+  /// type): their mean, in which speckle and noise are weaker than in any one of them.
+  static Reference fromImages(const std::vector<cv::Mat>& images,
+                              const ReferenceConfig& config = {});
   /// Reference points with a position, and the longest slit (the RDMap cloud's width).
   std::size_t pointCount() const;
   int maxSlitLength() const;

@@ -1,0 +1,551 @@
+#include "slit_tracks.h"
+
+#include <Eigen/Dense>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace multislit {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr double kFwhmPerSigma = 2.3548;
+
+struct Centre {
+  int row;
+  double u, width;
+};
+
+// A slit being followed down the image, row by row.
+struct Track {
+  std::vector<Centre> points;
+  int firstRow() const { return points.front().row; }
+  int lastRow() const { return points.back().row; }
+  double predict(int row) const {  // linear extrapolation over the last few rows
+    const Centre& b = points.back();
+    if (points.size() < 2) return b.u;
+    const Centre& a = points[points.size() - std::min<std::size_t>(points.size(), 8)];
+    if (a.row == b.row) return b.u;
+    return b.u + (b.u - a.u) / (b.row - a.row) * (row - b.row);
+  }
+};
+
+/// The image as float with every row smoothed by a Gaussian of `sigma` [px] along the row only:
+/// a slit's profile lies along the row, and a symmetric kernel keeps its centre where it is.
+cv::Mat smoothRows(const cv::Mat& image, double sigma) {
+  cv::Mat out;
+  image.convertTo(out, CV_32F);
+  const int half = static_cast<int>(std::ceil(3 * sigma));
+  const cv::Mat along = cv::getGaussianKernel(2 * half + 1, sigma, CV_32F);
+  const cv::Mat across = cv::Mat::ones(1, 1, CV_32F);
+  cv::sepFilter2D(out, out, CV_32F, along, across, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+  return out;
+}
+
+/// Full width at half maximum of the profile whose top is p[x] over a background `low`, by
+/// linear interpolation of both flanks; 0 when a flank does not fall within `reach` pixels.
+double halfMaximumWidth(const float* p, int x, float low, int reach) {
+  const float half = 0.5f * (p[x] + low);
+  int l = x, r = x;
+  while (l > x - reach && p[l] > half) --l;
+  while (r < x + reach && p[r] > half) ++r;
+  if (p[l] > half || p[r] > half) return 0;
+  const double left = l + (half - p[l]) / static_cast<double>(p[l + 1] - p[l]);
+  const double right = r - (half - p[r]) / static_cast<double>(p[r - 1] - p[r]);
+  return right - left;
+}
+
+// 1. Every row: maxima that stand out, measured to sub-pixel precision on the smoothed rows.
+std::vector<std::vector<Centre>> rowCentres(const cv::Mat& smooth, const ProfileParams& p) {
+  std::vector<std::vector<Centre>> rows(static_cast<std::size_t>(smooth.rows));
+  const int w = p.half_window, n = smooth.cols;
+  for (int r = 0; r < smooth.rows; ++r) {
+    const auto* row = smooth.ptr<std::uint16_t>(r);
+    int last_kept = -1000;
+    double last_value = 0;
+    for (int x = 1; x + 1 < n; ++x) {
+      if (!(row[x] > row[x - 1] && row[x] >= row[x + 1])) continue;
+      const double base = std::min(row[std::max(0, x - w - 2)], row[std::min(n - 1, x + w + 2)]);
+      if (row[x] - base < p.min_contrast) continue;
+      Peak peak;
+      if (!measurePeakAt(row, n, x, p, &peak)) continue;
+      // A slit falls to under half its contrast on both sides within the window; the edge of a
+      // bright tile or a lamp's glare stays up on one.
+      const double half = row[x] - 0.5 * peak.contrast;
+      if (!(row[std::max(0, x - w)] < half && row[std::min(n - 1, x + w)] < half)) continue;
+      auto& out = rows[static_cast<std::size_t>(r)];
+      if (x - last_kept <= 2 * w && !out.empty()) {  // two maxima of one profile: keep the higher
+        if (row[x] <= last_value) continue;
+        out.pop_back();
+      }
+      out.push_back({r, peak.centre, peak.width});
+      last_kept = x;
+      last_value = row[x];
+    }
+  }
+  return rows;
+}
+
+// 2. Link centres of consecutive rows into tracks; a track ends after `max_gap` empty rows.
+std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int max_gap,
+                              double tolerance) {
+  const double first_step = std::max(15.0, 2 * tolerance);  // [px]
+  std::vector<Track> open, done;
+  for (const auto& centres : rows) {
+    if (centres.empty()) continue;
+    const int row = centres.front().row;
+    std::vector<bool> used(centres.size(), false);
+    for (Track& t : open) {
+      const double tol = t.points.size() < 2 ? first_step : tolerance;
+      int best = -1;
+      double best_d = tol;
+      for (std::size_t k = 0; k < centres.size(); ++k) {
+        const double d = std::abs(centres[k].u - t.predict(row));
+        if (!used[k] && d < best_d) best = static_cast<int>(k), best_d = d;
+      }
+      if (best >= 0) {
+        t.points.push_back(centres[static_cast<std::size_t>(best)]);
+        used[static_cast<std::size_t>(best)] = true;
+      }
+    }
+    for (std::size_t k = 0; k < centres.size(); ++k)
+      if (!used[k]) open.push_back(Track{{centres[k]}});
+    for (auto it = open.begin(); it != open.end();) {
+      if (row - it->lastRow() > max_gap) {
+        done.push_back(std::move(*it));
+        it = open.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  done.insert(done.end(), open.begin(), open.end());
+  return done;
+}
+
+/// u = a + b r + c r^2 through `pts`, r = row / 100, by least squares refitted without the
+/// points beyond three robust sigmas (centres cut by a dark line or a speckle grain); with
+/// `curvature` given, c is fixed to it. Returns (a, b, c) and the median |residual| [px].
+struct Course {
+  Eigen::Vector3d coef = Eigen::Vector3d::Zero();
+  double spread = 0;
+};
+
+Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullptr) {
+  const auto n = static_cast<long>(pts.size());
+  const int unknowns = curvature ? 2 : 3;
+  Eigen::MatrixXd a(n, unknowns);
+  Eigen::VectorXd b(n), weight = Eigen::VectorXd::Ones(n), x;
+  for (long i = 0; i < n; ++i) {
+    const double r = pts[static_cast<std::size_t>(i)].row / 100.0;
+    a(i, 0) = 1.0;
+    a(i, 1) = r;
+    if (!curvature) a(i, 2) = r * r;
+    b(i) = pts[static_cast<std::size_t>(i)].u - (curvature ? *curvature * r * r : 0.0);
+  }
+  std::vector<double> res(pts.size());
+  double median = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    x = (weight.asDiagonal() * a).colPivHouseholderQr().solve(weight.asDiagonal() * b);
+    for (long i = 0; i < n; ++i)
+      res[static_cast<std::size_t>(i)] = std::abs((a.row(i) * x)(0) - b(i));
+    std::vector<double> sorted = res;
+    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
+    median = sorted[static_cast<std::size_t>(n / 2)];
+    for (long i = 0; i < n; ++i)
+      weight(i) = res[static_cast<std::size_t>(i)] <= std::max(1.0, 4.5 * median) ? 1.0 : 0.0;
+  }
+  Course c;
+  c.coef << x(0), x(1), curvature ? *curvature : x(2);
+  c.spread = median;
+  return c;
+}
+
+/// The curvature the projector gives its slits (the pattern's distortion), as the median over
+/// the tracks long enough to show it; 0 when none is.
+double patternCurvature(const std::vector<Track>& tracks) {
+  constexpr std::size_t kLong = 80;  // [rows]
+  std::vector<double> c;
+  for (const Track& t : tracks)
+    if (t.points.size() >= kLong) c.push_back(fitCourse(t.points).coef(2));
+  if (c.empty()) return 0;
+  std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
+  return c[c.size() / 2];
+}
+
+/// Column of track `t` at `row`, linear between its points (rows outside: its end's column).
+double columnAt(const Track& t, int row) {
+  const auto& p = t.points;
+  const auto it =
+      std::lower_bound(p.begin(), p.end(), row, [](const Centre& c, int r) { return c.row < r; });
+  if (it == p.begin()) return p.front().u;
+  if (it == p.end()) return p.back().u;
+  const Centre& hi = *it;
+  const Centre& lo = *(it - 1);
+  if (hi.row == row) return hi.u;
+  return lo.u + (hi.u - lo.u) * (row - lo.row) / static_cast<double>(hi.row - lo.row);
+}
+
+/// How far apart the courses of `a` and `b` (b starting no higher than a) pass [px]: over the
+/// rows both cover, the median distance; over a gap, the median distance from one course with
+/// the pattern's `curvature` through the ends of both (`scatter`: that of each end alone). Infinite
+/// when b lies wholly inside a's rows (a second profile beside the slit), or when the ends are too
+/// short to tell a course across the gap.
+double courseMismatch(const Track& a, const Track& b, double curvature, double* scatter) {
+  constexpr std::size_t kFit = 80;  // rows of each end that give its course
+  constexpr std::size_t kMinEnd = 20;
+  const auto& pa = a.points;
+  const auto& pb = b.points;
+  *scatter = 0;
+  if (b.firstRow() <= a.lastRow()) {
+    if (b.lastRow() <= a.lastRow()) return std::numeric_limits<double>::infinity();
+    std::vector<double> d;
+    for (const Centre& c : pb)
+      if (c.row <= a.lastRow()) d.push_back(std::abs(c.u - columnAt(a, c.row)));
+    std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+    return d[d.size() / 2];
+  }
+  const std::vector<Centre> end_a(pa.end() - static_cast<long>(std::min(kFit, pa.size())),
+                                  pa.end());
+  const std::vector<Centre> end_b(pb.begin(),
+                                  pb.begin() + static_cast<long>(std::min(kFit, pb.size())));
+  // Ends must be long enough for their slopes to say where they go: a quarter of the gap.
+  const int span_a = end_a.back().row - end_a.front().row,
+            span_b = end_b.back().row - end_b.front().row;
+  if (end_a.size() < kMinEnd || end_b.size() < kMinEnd ||
+      4 * std::min(span_a, span_b) < b.firstRow() - a.lastRow())
+    return std::numeric_limits<double>::infinity();
+  std::vector<Centre> both = end_a;
+  both.insert(both.end(), end_b.begin(), end_b.end());
+  *scatter = std::max(fitCourse(end_a, &curvature).spread, fitCourse(end_b, &curvature).spread);
+  return fitCourse(both, &curvature).spread;
+}
+
+/// b's points below a's end appended to a (a speckled slit followed twice keeps one course).
+void append(Track& a, const Track& b) {
+  for (const Centre& c : b.points)
+    if (c.row > a.lastRow()) a.points.push_back(c);
+}
+
+// 3. Pieces of one slit, broken by speckle, a dark stain or an occluder, or followed twice where
+// speckle made its centre jump, are joined when their courses meet (a slit is a smooth curve).
+int joinTracks(std::vector<Track>& tracks, int max_join_gap, double tolerance) {
+  constexpr std::size_t kMinPiece = 5;  // [rows] shorter pieces have no course to extrapolate
+  tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
+                              [](const Track& t) { return t.points.size() < kMinPiece; }),
+               tracks.end());
+  const double curvature = patternCurvature(tracks);
+  int joined = 0;
+  for (;;) {
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t best_a = 0, best_b = 0;
+    for (std::size_t a = 0; a < tracks.size(); ++a)
+      for (std::size_t b = 0; b < tracks.size(); ++b) {
+        const int gap = tracks[b].firstRow() - tracks[a].lastRow();
+        const bool later = tracks[b].firstRow() > tracks[a].firstRow() ||
+                           (tracks[b].firstRow() == tracks[a].firstRow() && b > a);
+        if (a == b || !later || gap > max_join_gap) continue;
+        double scatter = 0;
+        const double miss = courseMismatch(tracks[a], tracks[b], curvature, &scatter);
+        // One course: the joint fit is about as good as the pieces' own (their scatter).
+        const double limit = std::max(tolerance, 2 * scatter);
+        if (miss <= limit && miss < best) best = miss, best_a = a, best_b = b;
+      }
+    if (!std::isfinite(best)) return joined;
+    append(tracks[best_a], tracks[best_b]);
+    tracks.erase(tracks.begin() + static_cast<long>(best_b));
+    ++joined;
+  }
+}
+
+std::string describe(const std::vector<Track>& tracks) {
+  std::ostringstream s;
+  for (std::size_t k = 0; k < tracks.size() && k < 20; ++k)
+    s << (k ? ", " : "") << "rows " << tracks[k].firstRow() << "-" << tracks[k].lastRow();
+  if (tracks.size() > 20) s << ", ...";
+  return s.str();
+}
+
+/// Position of a track across the fan's direction `normal`, at its middle point.
+double across(const Track& t, const Eigen::Vector2d& normal) {
+  const Centre& m = t.points[t.points.size() / 2];
+  return normal.dot(Eigen::Vector2d(m.u, m.row));
+}
+
+// 4. The slits: the `expected` longest tracks (each at least min_rows long), ordered across the
+// fan (down and to the right). What is left over is speckle or reflections and is dropped; too
+// few long tracks, or a second-best as long as a slit, or two slits closer than half the
+// pattern's spacing, and the image does not show the pattern.
+std::vector<Track> selectSlits(std::vector<Track> tracks, const ReferenceConfig& config,
+                               const std::string& what, int* dropped) {
+  std::stable_sort(tracks.begin(), tracks.end(), [](const Track& a, const Track& b) {
+    return a.points.size() > b.points.size();
+  });
+  const auto expected = static_cast<std::size_t>(config.expected_slits);
+  auto is_long = [&](const Track& t) {
+    return static_cast<int>(t.points.size()) >= config.min_rows;
+  };
+  const auto long_count =
+      static_cast<std::size_t>(std::count_if(tracks.begin(), tracks.end(), is_long));
+  // A slit runs across most rows of the pattern; a piece that speckle split off one is shorter
+  // than half the median slit.
+  const bool ambiguous = long_count > expected &&
+                         tracks[expected].points.size() >= tracks[expected / 2].points.size() / 2;
+  if (long_count < expected || ambiguous) {
+    tracks.resize(long_count);
+    std::ostringstream msg;
+    msg << what << ": found " << long_count << " slits, expected " << expected;
+    if (!tracks.empty()) msg << " (" << describe(tracks) << ")";
+    if (tracks.empty()) msg << ": is the laser on, and is this an image of a plane?";
+    throw std::runtime_error(msg.str());
+  }
+  *dropped = static_cast<int>(tracks.size() - expected);
+  tracks.resize(expected);
+  Eigen::Vector2d along = Eigen::Vector2d::Zero();
+  for (const Track& t : tracks)
+    along += Eigen::Vector2d(t.points.back().u - t.points.front().u, t.lastRow() - t.firstRow());
+  Eigen::Vector2d normal(along.y(), -along.x());
+  if (normal.x() + normal.y() < 0) normal = -normal;
+  std::sort(tracks.begin(), tracks.end(),
+            [&](const Track& a, const Track& b) { return across(a, normal) < across(b, normal); });
+  std::vector<double> spacing;
+  for (std::size_t k = 1; k < tracks.size(); ++k)
+    spacing.push_back(across(tracks[k], normal) - across(tracks[k - 1], normal));
+  if (!spacing.empty()) {
+    std::vector<double> sorted = spacing;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                     sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    for (std::size_t k = 0; k < spacing.size(); ++k)
+      if (spacing[k] < 0.5 * median)
+        throw std::runtime_error(what + ": two slit-like tracks (" + describe({tracks[k]}) +
+                                 " and " + describe({tracks[k + 1]}) + ") are " +
+                                 std::to_string(spacing[k]) + " px apart, under half of the " +
+                                 std::to_string(median) + " px between the projector's slits");
+  }
+  return tracks;
+}
+
+// 5. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve.
+Eigen::VectorXd fitSlit(const std::vector<Centre>& pts, int degree, double mid, double half,
+                        std::vector<bool>* inlier) {
+  const int n = static_cast<int>(pts.size());
+  inlier->assign(pts.size(), true);
+  Eigen::VectorXd coef = Eigen::VectorXd::Zero(degree + 1);
+  std::vector<double> res(pts.size());
+  for (int pass = 0; pass < 4; ++pass) {
+    Eigen::MatrixXd a(n, degree + 1);
+    Eigen::VectorXd b(n);
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const double s = (pts[k].row - mid) / half;
+      const double w = (*inlier)[k] ? 1.0 : 0.0;
+      double p = 1;
+      for (int d = 0; d <= degree; ++d, p *= s) a(i, d) = w * p;
+      b(i) = w * pts[k].u;
+    }
+    coef = a.colPivHouseholderQr().solve(b);
+    double ss = 0;
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const double s = (pts[k].row - mid) / half;
+      double p = 1, u = 0;
+      for (int d = 0; d <= degree; ++d, p *= s) u += coef(d) * p;
+      res[k] = pts[k].u - u;
+      if ((*inlier)[k]) ss += res[k] * res[k], ++m;
+    }
+    const double limit = std::max(0.3, 3.0 * std::sqrt(ss / std::max(m, 1)));
+    for (std::size_t k = 0; k < pts.size(); ++k) (*inlier)[k] = std::abs(res[k]) <= limit;
+  }
+  return coef;
+}
+
+/// Each centre measured again in the raw image, where smoothing neither widens a profile cut by
+/// the slit's end nor moves its centre: its width, and its centre where the raw profile gives one
+/// (width 0 where it does not).
+template <typename T>
+void measureRaw(const cv::Mat& image, double width, Estimator estimator,
+                std::vector<Track>* tracks) {
+  ProfileParams p;
+  p.estimator = estimator;
+  p.half_window = std::max(3, static_cast<int>(std::lround(1.25 * width)));
+  p.min_contrast = 0;
+  p.min_width = 0;
+  p.max_width = image.cols;
+  p.saturation = image.depth() == CV_8U ? 255.0 : 65535.0;
+  p.max_saturated = image.cols;
+  const int reach = std::max(1, static_cast<int>(std::lround(0.25 * width)));
+  for (Track& t : *tracks)
+    for (Centre& c : t.points) {
+      const T* row = image.ptr<T>(c.row);
+      const int x0 = std::clamp(static_cast<int>(std::lround(c.u)), 0, image.cols - 1);
+      int top = x0;
+      for (int x = std::max(0, x0 - reach); x <= std::min(image.cols - 1, x0 + reach); ++x)
+        if (row[x] > row[top]) top = x;
+      Peak peak;
+      const bool ok =
+          measurePeakAt(row, image.cols, top, p, &peak) && std::abs(peak.centre - c.u) <= reach;
+      c.width = ok ? peak.width : 0.0;
+      if (ok) c.u = peak.centre;
+    }
+}
+
+/// A track as a reference slit: raw centres, or the smoothed curve over the rows where the slit
+/// runs clean. Adds the squared residuals of the kept centres to `ss`, their count to `m`. False
+/// when fewer than min_rows clean rows are left.
+bool toSlit(const Track& t, const ReferenceConfig& config, ReferenceSlit* slit, double* ss,
+            std::size_t* m) {
+  slit->first_row = t.firstRow();
+  slit->u.assign(static_cast<std::size_t>(t.lastRow() - slit->first_row + 1), kNaN);
+  if (config.smoothing_degree == 0) {
+    for (const Centre& c : t.points)
+      slit->u[static_cast<std::size_t>(c.row - slit->first_row)] = static_cast<float>(c.u);
+    return true;
+  }
+  const double mid = 0.5 * (t.firstRow() + t.lastRow()),
+               half = std::max(1.0, 0.5 * (t.lastRow() - t.firstRow()));
+  // Near its ends a slit is cut inside the row profile, which narrows the profile (as the raw
+  // image shows it) and pulls its centre inwards: such rows are dropped until the slit runs clean.
+  // The width changes slowly along a slit: each end is judged by the rows next to it.
+  const std::size_t n = t.points.size(), near = std::min<std::size_t>(n / 2, 40);
+  auto narrowness = [&](std::size_t from) {
+    std::vector<double> w;
+    for (std::size_t i = from; i < from + near; ++i) w.push_back(t.points[i].width);
+    std::nth_element(w.begin(), w.begin() + static_cast<long>(w.size() / 2), w.end());
+    return 0.85 * w[w.size() / 2];
+  };
+  const double narrow_first = narrowness(0), narrow_last = narrowness(n - near);
+  std::vector<bool> inlier;
+  const Eigen::VectorXd coef = fitSlit(t.points, config.smoothing_degree, mid, half, &inlier);
+  auto clean = [&](std::size_t i) {
+    return inlier[i] && t.points[i].width >= (i < n / 2 ? narrow_first : narrow_last);
+  };
+  std::size_t begin = 0, end = t.points.size();
+  while (begin < end && !clean(begin)) ++begin;
+  while (end > begin && !clean(end - 1)) --end;
+  if (end - begin < static_cast<std::size_t>(config.min_rows)) return false;
+  slit->first_row = t.points[begin].row;
+  const int kept_last = t.points[end - 1].row;
+  slit->u.assign(static_cast<std::size_t>(kept_last - slit->first_row + 1), kNaN);
+  for (int r = slit->first_row; r <= kept_last; ++r) {
+    const double s = (r - mid) / half;
+    double p = 1, u = 0;
+    for (int k = 0; k <= config.smoothing_degree; ++k, p *= s) u += coef(k) * p;
+    slit->u[static_cast<std::size_t>(r - slit->first_row)] = static_cast<float>(u);
+  }
+  for (std::size_t i = begin; i < end; ++i) {
+    if (!inlier[i]) continue;
+    const double d =
+        t.points[i].u - slit->u[static_cast<std::size_t>(t.points[i].row - slit->first_row)];
+    *ss += d * d;
+    ++*m;
+  }
+  return true;
+}
+
+}  // namespace
+
+double stripeWidth(const cv::Mat& image, double min_contrast) {
+  constexpr double kSmooth = 1.5;  // [px] against speckle
+  constexpr int kReach = 24;       // [px] a stripe's surroundings, under the slits' spacing
+  constexpr int kRowStep = 4;
+  const cv::Mat s = smoothRows(image, kSmooth);
+  std::vector<double> widths;
+  for (int r = 0; r < s.rows; r += kRowStep) {
+    const float* p = s.ptr<float>(r);
+    for (int x = kReach; x + kReach < s.cols; ++x) {
+      if (!(p[x] > p[x - 1] && p[x] >= p[x + 1])) continue;
+      float low = p[x];
+      bool top = true;
+      for (int d = -kReach; d <= kReach && top; ++d) {
+        top = d < 0 ? p[x + d] < p[x] : p[x + d] <= p[x];
+        low = std::min(low, p[x + d]);
+      }
+      if (!top || p[x] - low < min_contrast) continue;
+      const double width = halfMaximumWidth(p, x, low, kReach);
+      if (width > 0) widths.push_back(width);
+    }
+  }
+  if (widths.empty()) return 0;
+  std::nth_element(widths.begin(), widths.begin() + static_cast<long>(widths.size() / 2),
+                   widths.end());
+  const double measured = widths[widths.size() / 2], smear = kFwhmPerSigma * kSmooth;
+  return std::sqrt(std::max(measured * measured - smear * smear, 1.0));
+}
+
+double imageNoise(const cv::Mat& image) {
+  constexpr int kRowStep = 8;
+  cv::Mat row;
+  std::vector<double> d;
+  for (int r = 0; r < image.rows; r += kRowStep) {
+    image.row(r).convertTo(row, CV_64F);
+    const auto* p = row.ptr<double>();
+    for (int x = 1; x + 1 < image.cols; ++x)
+      d.push_back(std::abs(p[x] - 0.5 * (p[x - 1] + p[x + 1])));
+  }
+  if (d.empty()) return 0;
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return 1.4826 * d[d.size() / 2] / std::sqrt(1.5);  // the second difference has 1.5 variances
+}
+
+DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
+                          const std::string& what) {
+  // The image in 16-bit DN (an 8-bit image times 257), so that smoothing keeps its fractions.
+  const double to16 = image.depth() == CV_8U ? 257.0 : 1.0;
+  // The contrast limit: the configured one, or lower where the image is clean enough that
+  // kNoiseSigmas of its noise are less (a dim laser on a dark floor), never below kLowest.
+  constexpr double kNoiseSigmas = 8.0, kLowest = 0.015;
+  const double min_contrast =
+      std::min(config.min_contrast,
+               std::max(kLowest, kNoiseSigmas * imageNoise(image) * to16 / 65535.0)) *
+      65535.0;
+  const double width = stripeWidth(image, min_contrast / to16);
+  DetectedSlits out;
+  out.profile_width = width;
+  // Smoothed over 0.4 of the stripe's width, speckle no longer splits a profile in two.
+  const double sigma = std::max(1.0, 0.4 * width);
+  const double smoothed_width = std::hypot(width, kFwhmPerSigma * sigma);
+  cv::Mat smooth16;
+  smoothRows(image, sigma).convertTo(smooth16, CV_16U, to16);
+  ProfileParams params;
+  params.estimator = config.estimator;
+  params.min_contrast = min_contrast;
+  params.saturation = 65535.0;
+  params.half_window = std::max(3, static_cast<int>(std::lround(1.25 * smoothed_width)));
+  params.min_width = 1.0;
+  params.max_width = 2.0 * smoothed_width;  // wider is a brighter tile or a lamp, not a slit
+  params.max_saturated = image.cols;        // a saturated plateau is still a slit in a reference
+  // A centre may move from row to row by its noise, which grows with the stripe's width.
+  const double tolerance = std::max(4.0, 0.3 * smoothed_width);
+  std::vector<Track> tracks =
+      width > 0 ? linkTracks(rowCentres(smooth16, params), config.max_gap, tolerance)
+                : std::vector<Track>{};
+  out.joined = joinTracks(tracks, image.rows / 2, 0.5 * tolerance);
+  std::vector<Track> slits = selectSlits(std::move(tracks), config, what, &out.dropped);
+  if (image.depth() == CV_8U)
+    measureRaw<std::uint8_t>(image, width, config.estimator, &slits);
+  else
+    measureRaw<std::uint16_t>(image, width, config.estimator, &slits);
+  double ss = 0;
+  std::size_t m = 0;
+  for (const Track& t : slits) {
+    ReferenceSlit slit;
+    if (toSlit(t, config, &slit, &ss, &m)) out.slits.push_back(std::move(slit));
+  }
+  if (out.slits.size() != slits.size())
+    throw std::runtime_error(what + ": " + std::to_string(slits.size() - out.slits.size()) +
+                             " slits run clean over fewer than " + std::to_string(config.min_rows) +
+                             " rows");
+  out.smoothing_rms = m ? std::sqrt(ss / static_cast<double>(m)) : 0.0;
+  return out;
+}
+
+}  // namespace multislit
