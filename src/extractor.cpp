@@ -13,7 +13,7 @@ void ExtractorConfig::validate() const {
   };
   require(min_contrast > 0 && min_contrast < 1, "min_contrast", "must be in (0, 1) of full scale");
   require(max_width_factor >= 1, "max_width_factor", "must be >= 1");
-  require(min_width_factor >= 0 && min_width_factor <= 1, "min_width_factor", "must be in [0, 1]");
+  require(min_width >= 0 && min_width <= 64, "min_width", "must be in [0, 64] px");
   require(max_saturated >= 0, "max_saturated", "must be >= 0 px");
   require(full_scale >= 0, "full_scale", "must be >= 0 (0: from the image type)");
 }
@@ -104,20 +104,24 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
   }
 }
 
-ExtractionStats Extractor::extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const {
-  reference_.checkImage(image, "image");
+ProfileParams Extractor::profileParams(int depth) const {
   const double full =
-      config_.full_scale > 0 ? config_.full_scale : (image.depth() == CV_8U ? 255.0 : 65535.0);
+      config_.full_scale > 0 ? config_.full_scale : (depth == CV_8U ? 255.0 : 65535.0);
   ProfileParams params;
   params.estimator = config_.estimator;
   params.min_contrast = config_.min_contrast * full;
   params.saturation = full;
   params.max_saturated = config_.max_saturated;
-  params.min_width = config_.min_width_factor * reference_.profile_width;
+  params.min_width = config_.min_width;
   params.max_width = config_.max_width_factor * reference_.profile_width;
   params.half_window = std::max(3, static_cast<int>(std::lround(1.25 * reference_.profile_width)));
   params.window_sigma = reference_.profile_width / 2.3548;  // FWHM to sigma
+  return params;
+}
 
+ExtractionStats Extractor::extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const {
+  reference_.checkImage(image, "image");
+  const ProfileParams params = profileParams(image.depth());
   cloud.width = static_cast<std::uint32_t>(reference_.maxSlitLength());
   cloud.height = static_cast<std::uint32_t>(reference_.slits.size());
   cloud.is_dense = false;

@@ -62,17 +62,7 @@ const Data& data() {
 }
 
 ProfileParams paramsOf(const Reference& ref) {  // as Extractor::extract sets them for 8 bits
-  const ExtractorConfig c;
-  ProfileParams p;
-  p.estimator = c.estimator;
-  p.min_contrast = c.min_contrast * 255.0;
-  p.saturation = 255.0;
-  p.max_saturated = c.max_saturated;
-  p.min_width = c.min_width_factor * ref.profile_width;
-  p.max_width = c.max_width_factor * ref.profile_width;
-  p.half_window = std::max(3, static_cast<int>(std::lround(1.25 * ref.profile_width)));
-  p.window_sigma = ref.profile_width / 2.3548;
-  return p;
+  return Extractor(ref).profileParams(CV_8U);
 }
 
 // Search each assigned region of one row for its slit and measure it (the per-point kernel).

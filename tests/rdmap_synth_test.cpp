@@ -20,9 +20,14 @@ const Reference& reference() {
 
 struct Comparison {
   std::size_t extracted = 0, synthesized = 0, both = 0;
-  double dk_rms = 0.0;   // [px]
+  std::size_t cut = 0;   // points whose dk differs by more than kCut
+  double dk_rms = 0.0;   // [px] over the others
   double xyz_rms = 0.0;  // [m]
 };
+
+// The extractor measures profiles cut by an object's silhouette too (narrow, their centre pulled
+// by px), which the synthesizer places exactly: those are counted, not averaged into the rms.
+constexpr double kCut = 2.0;  // [px]
 
 Comparison compare(const pcl::PointCloud<PointRDM>& a, const pcl::PointCloud<PointRDM>& b) {
   Comparison c;
@@ -33,6 +38,10 @@ Comparison compare(const pcl::PointCloud<PointRDM>& a, const pcl::PointCloud<Poi
     c.synthesized += in_b;
     if (!in_a || !in_b) continue;
     ++c.both;
+    if (std::abs(a[i].dk - b[i].dk) > kCut) {
+      ++c.cut;
+      continue;
+    }
     dk += std::pow(a[i].dk - b[i].dk, 2);
     xyz += (a[i].getVector3fMap() - b[i].getVector3fMap()).squaredNorm();
   }
@@ -59,6 +68,7 @@ TEST(RDMapSynthesizer, MatchesTheExtractorOnRenderedFrames) {
     EXPECT_GE(static_cast<double>(c.both), 0.99 * static_cast<double>(c.extracted)) << name;
     EXPECT_GE(static_cast<double>(c.both), 0.99 * static_cast<double>(c.synthesized)) << name;
     EXPECT_LT(c.dk_rms, 0.25) << name;
+    EXPECT_LE(c.cut * 200, c.both) << name;  // at most 0.5 %
     EXPECT_LT(c.xyz_rms, 0.0015) << name;
     const FloorDetector detector;
     const FloorResult fe = detector.detect(extracted), fs = detector.detect(synthesized);
@@ -66,8 +76,10 @@ TEST(RDMapSynthesizer, MatchesTheExtractorOnRenderedFrames) {
     EXPECT_NEAR(static_cast<double>(fs.obstacles.size()), static_cast<double>(fe.obstacles.size()),
                 0.2 * static_cast<double>(fe.obstacles.size()) + 2)
         << name;
-    std::printf("%s: %zu extracted, %zu synthesized, dk rms difference %.3f px, xyz %.2f mm\n",
-                name, c.extracted, c.synthesized, c.dk_rms, 1e3 * c.xyz_rms);
+    std::printf(
+        "%s: %zu extracted, %zu synthesized, dk rms difference %.3f px (%zu cut profiles), xyz "
+        "%.2f mm\n",
+        name, c.extracted, c.synthesized, c.dk_rms, c.cut, 1e3 * c.xyz_rms);
   }
 }
 

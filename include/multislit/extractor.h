@@ -17,10 +17,12 @@ struct ExtractorConfig {
   Estimator estimator = Estimator::Gaussian;  ///< chosen by measurement, see README
   double min_contrast = 0.06;                 ///< slit peak above its background [full scale]
   double max_width_factor = 2.5;  ///< widest valid profile, times the reference's width [-]
-  double min_width_factor = 0.6;  ///< narrowest valid profile, times the reference's width:
-                                  ///< a slit cut by its end or by an edge is narrower [-]
-  int max_saturated = 16;         ///< longest saturated run still measured [px]
-  double full_scale = 0.0;        ///< the image's white [DN]; 0: 255 for 8-bit, 65535 for 16-bit
+  /// Narrowest valid profile (pixels above half its contrast): a lone hot or speckle pixel is
+  /// narrower. Absolute, not relative to the floor's stripe: on a glossy or small object the
+  /// stripe may be half as wide as on the floor, and it is still the slit [px].
+  double min_width = 1.5;
+  int max_saturated = 16;   ///< longest saturated run still measured [px]
+  double full_scale = 0.0;  ///< the image's white [DN]; 0: 255 for 8-bit, 65535 for 16-bit
   std::string frame_id = "multislit_camera";  ///< header.frame_id of the clouds
 
   void validate() const;  ///< throws std::invalid_argument naming the field
@@ -38,6 +40,8 @@ class Extractor {
 
   const Reference& reference() const { return reference_; }
   const ExtractorConfig& config() const { return config_; }
+  /// The profile tests and window for images of this depth (CV_8U or CV_16U).
+  ProfileParams profileParams(int depth) const;
 
   /// The RDMap of `image`: one cloud row per slit, one column per reference row of that slit
   /// (column j of slit i is image row first_row_i + j); NaN where nothing valid was measured.
