@@ -109,6 +109,7 @@ void ObstacleClustererConfig::validate() const {
   require(slit_link_radius > 0, "slit_link_radius", "must be > 0 px");
   require(tolerance > 0 && tolerance < 1, "tolerance", "must be in (0, 1) m");
   require(min_points >= 1, "min_points", "must be >= 1");
+  require(min_run >= 1, "min_run", "must be >= 1");
   require(feet_half_length >= 0, "feet_half_length", "must be >= 0 m");
   require(feet_half_width >= 0, "feet_half_width", "must be >= 0 m");
 }
@@ -155,6 +156,25 @@ ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config) : co
   config_.validate();
 }
 
+namespace {
+
+/// The most points of one slit (one cloud row of `width`) on neighbouring rows, a gap of one
+/// row allowed, in a group.
+int longestRun(pcl::Indices group, std::uint32_t cloud_width) {
+  const auto width = static_cast<pcl::index_t>(cloud_width);
+  std::sort(group.begin(), group.end());
+  int best = 0, run = 0;
+  for (std::size_t i = 0; i < group.size(); ++i) {
+    const bool continues =
+        i > 0 && group[i] / width == group[i - 1] / width && group[i] - group[i - 1] <= 2;
+    run = continues ? run + 1 : 1;
+    best = std::max(best, run);
+  }
+  return best;
+}
+
+}  // namespace
+
 ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
                                           const FloorResult& floor,
                                           const Eigen::Isometry3d& robot_from_camera) const {
@@ -168,7 +188,8 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
                                                : euclideanGroups(*cloud, floor.obstacles);
   // Reject groups too small to be real, then size and place the others.
   for (const pcl::Indices& group : groups) {
-    if (group.size() < static_cast<std::size_t>(config_.min_points)) {
+    if (group.size() < static_cast<std::size_t>(config_.min_points) ||
+        longestRun(group, cloud->width) < config_.min_run) {
       ++result.rejected_groups;
       result.rejected.insert(result.rejected.end(), group.begin(), group.end());
       continue;

@@ -40,6 +40,11 @@ struct ObstacleClustererConfig {
   /// threshold lets 0.27% of a Gaussian floor through) almost never come in 3 connected ones. The
   /// 7 mm LAN cable crosses each slit along dozens of rows, the 40 mm ball along a hundred.
   int min_points = 3;  ///< [-]
+  /// And it must hold this many points of one slit on neighbouring rows (a gap of one row
+  /// allowed): an object lifts a run of rows, while noise that passes the threshold is scattered,
+  /// and the grid grouping's gaps of up to max_gap rows would otherwise chain it into groups.
+  /// 1: no such rule.
+  int min_run = 3;  ///< [points]
   /// The feet, seen from above in the robot frame: |x| <= feet_half_length, |y| <=
   /// feet_half_width. Obstacle::distance is measured from this rectangle. Defaults: the HOAP-2
   /// sole (95 x 65 mm), feet 78 mm apart, the leading foot half a 40 mm step ahead.
