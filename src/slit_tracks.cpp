@@ -1,13 +1,13 @@
 #include "slit_tracks.h"
 
+#include "slit_course.h"
+
 #include <Eigen/Dense>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -17,25 +17,6 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kFwhmPerSigma = 2.3548;
-
-struct Centre {
-  int row;
-  double u, width;
-};
-
-// A slit being followed down the image, row by row.
-struct Track {
-  std::vector<Centre> points;
-  int firstRow() const { return points.front().row; }
-  int lastRow() const { return points.back().row; }
-  double predict(int row) const {  // linear extrapolation over the last few rows
-    const Centre& b = points.back();
-    if (points.size() < 2) return b.u;
-    const Centre& a = points[points.size() - std::min<std::size_t>(points.size(), 8)];
-    if (a.row == b.row) return b.u;
-    return b.u + (b.u - a.u) / (b.row - a.row) * (row - b.row);
-  }
-};
 
 /// The image as float with every row smoothed by a Gaussian of `sigma` [px] along the row only:
 /// a slit's profile lies along the row, and a symmetric kernel keeps its centre where it is.
@@ -128,141 +109,6 @@ std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int 
   }
   done.insert(done.end(), open.begin(), open.end());
   return done;
-}
-
-/// u = a + b r + c r^2 through `pts`, r = row / 100, by least squares refitted without the
-/// points beyond three robust sigmas (centres cut by a dark line or a speckle grain); with
-/// `curvature` given, c is fixed to it. Returns (a, b, c) and the median |residual| [px].
-struct Course {
-  Eigen::Vector3d coef = Eigen::Vector3d::Zero();
-  double spread = 0;
-};
-
-Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullptr) {
-  const auto n = static_cast<long>(pts.size());
-  const int unknowns = curvature ? 2 : 3;
-  Eigen::MatrixXd a(n, unknowns);
-  Eigen::VectorXd b(n), weight = Eigen::VectorXd::Ones(n), x;
-  for (long i = 0; i < n; ++i) {
-    const double r = pts[static_cast<std::size_t>(i)].row / 100.0;
-    a(i, 0) = 1.0;
-    a(i, 1) = r;
-    if (!curvature) a(i, 2) = r * r;
-    b(i) = pts[static_cast<std::size_t>(i)].u - (curvature ? *curvature * r * r : 0.0);
-  }
-  std::vector<double> res(pts.size());
-  double median = 0;
-  for (int pass = 0; pass < 2; ++pass) {
-    x = (weight.asDiagonal() * a).colPivHouseholderQr().solve(weight.asDiagonal() * b);
-    for (long i = 0; i < n; ++i)
-      res[static_cast<std::size_t>(i)] = std::abs((a.row(i) * x)(0) - b(i));
-    std::vector<double> sorted = res;
-    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
-    median = sorted[static_cast<std::size_t>(n / 2)];
-    for (long i = 0; i < n; ++i)
-      weight(i) = res[static_cast<std::size_t>(i)] <= std::max(1.0, 4.5 * median) ? 1.0 : 0.0;
-  }
-  Course c;
-  c.coef << x(0), x(1), curvature ? *curvature : x(2);
-  c.spread = median;
-  return c;
-}
-
-/// The curvature the projector gives its slits (the pattern's distortion), as the median over
-/// the tracks long enough to show it; 0 when none is.
-double patternCurvature(const std::vector<Track>& tracks) {
-  constexpr std::size_t kLong = 80;  // [rows]
-  std::vector<double> c;
-  for (const Track& t : tracks)
-    if (t.points.size() >= kLong) c.push_back(fitCourse(t.points).coef(2));
-  if (c.empty()) return 0;
-  std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
-  return c[c.size() / 2];
-}
-
-/// Column of track `t` at `row`, linear between its points (rows outside: its end's column).
-double columnAt(const Track& t, int row) {
-  const auto& p = t.points;
-  const auto it =
-      std::lower_bound(p.begin(), p.end(), row, [](const Centre& c, int r) { return c.row < r; });
-  if (it == p.begin()) return p.front().u;
-  if (it == p.end()) return p.back().u;
-  const Centre& hi = *it;
-  const Centre& lo = *(it - 1);
-  if (hi.row == row) return hi.u;
-  return lo.u + (hi.u - lo.u) * (row - lo.row) / static_cast<double>(hi.row - lo.row);
-}
-
-/// How far apart the courses of `a` and `b` (b starting no higher than a) pass [px]: over the
-/// rows both cover, the median distance; over a gap, the median distance from one course with
-/// the pattern's `curvature` through the ends of both (`scatter`: that of each end alone). Infinite
-/// when b lies wholly inside a's rows (a second profile beside the slit), or when the ends are too
-/// short to tell a course across the gap.
-double courseMismatch(const Track& a, const Track& b, double curvature, double* scatter) {
-  constexpr std::size_t kFit = 80;  // rows of each end that give its course
-  constexpr std::size_t kMinEnd = 20;
-  const auto& pa = a.points;
-  const auto& pb = b.points;
-  *scatter = 0;
-  if (b.firstRow() <= a.lastRow()) {
-    if (b.lastRow() <= a.lastRow()) return std::numeric_limits<double>::infinity();
-    std::vector<double> d;
-    for (const Centre& c : pb)
-      if (c.row <= a.lastRow()) d.push_back(std::abs(c.u - columnAt(a, c.row)));
-    std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-    return d[d.size() / 2];
-  }
-  const std::vector<Centre> end_a(pa.end() - static_cast<long>(std::min(kFit, pa.size())),
-                                  pa.end());
-  const std::vector<Centre> end_b(pb.begin(),
-                                  pb.begin() + static_cast<long>(std::min(kFit, pb.size())));
-  // Ends must be long enough for their slopes to say where they go: a quarter of the gap.
-  const int span_a = end_a.back().row - end_a.front().row,
-            span_b = end_b.back().row - end_b.front().row;
-  if (end_a.size() < kMinEnd || end_b.size() < kMinEnd ||
-      4 * std::min(span_a, span_b) < b.firstRow() - a.lastRow())
-    return std::numeric_limits<double>::infinity();
-  std::vector<Centre> both = end_a;
-  both.insert(both.end(), end_b.begin(), end_b.end());
-  *scatter = std::max(fitCourse(end_a, &curvature).spread, fitCourse(end_b, &curvature).spread);
-  return fitCourse(both, &curvature).spread;
-}
-
-/// b's points below a's end appended to a (a speckled slit followed twice keeps one course).
-void append(Track& a, const Track& b) {
-  for (const Centre& c : b.points)
-    if (c.row > a.lastRow()) a.points.push_back(c);
-}
-
-// 3. Pieces of one slit, broken by speckle, a dark stain or an occluder, or followed twice where
-// speckle made its centre jump, are joined when their courses meet (a slit is a smooth curve).
-int joinTracks(std::vector<Track>& tracks, int max_join_gap, double tolerance) {
-  constexpr std::size_t kMinPiece = 5;  // [rows] shorter pieces have no course to extrapolate
-  tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
-                              [](const Track& t) { return t.points.size() < kMinPiece; }),
-               tracks.end());
-  const double curvature = patternCurvature(tracks);
-  int joined = 0;
-  for (;;) {
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t best_a = 0, best_b = 0;
-    for (std::size_t a = 0; a < tracks.size(); ++a)
-      for (std::size_t b = 0; b < tracks.size(); ++b) {
-        const int gap = tracks[b].firstRow() - tracks[a].lastRow();
-        const bool later = tracks[b].firstRow() > tracks[a].firstRow() ||
-                           (tracks[b].firstRow() == tracks[a].firstRow() && b > a);
-        if (a == b || !later || gap > max_join_gap) continue;
-        double scatter = 0;
-        const double miss = courseMismatch(tracks[a], tracks[b], curvature, &scatter);
-        // One course: the joint fit is about as good as the pieces' own (their scatter).
-        const double limit = std::max(tolerance, 2 * scatter);
-        if (miss <= limit && miss < best) best = miss, best_a = a, best_b = b;
-      }
-    if (!std::isfinite(best)) return joined;
-    append(tracks[best_a], tracks[best_b]);
-    tracks.erase(tracks.begin() + static_cast<long>(best_b));
-    ++joined;
-  }
 }
 
 std::string describe(const std::vector<Track>& tracks) {
