@@ -34,9 +34,7 @@ Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullp
     x = (weight.asDiagonal() * a).colPivHouseholderQr().solve(weight.asDiagonal() * b);
     for (long i = 0; i < n; ++i)
       res[static_cast<std::size_t>(i)] = std::abs((a.row(i) * x)(0) - b(i));
-    std::vector<double> sorted = res;
-    std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.end());
-    median = sorted[static_cast<std::size_t>(n / 2)];
+    median = upperMedian(res);
     for (long i = 0; i < n; ++i)
       weight(i) = res[static_cast<std::size_t>(i)] <= std::max(1.0, 4.5 * median) ? 1.0 : 0.0;
   }
@@ -54,8 +52,7 @@ double patternCurvature(const std::vector<Track>& tracks) {
   for (const Track& t : tracks)
     if (t.points.size() >= kLong) c.push_back(fitCourse(t.points).coef(2));
   if (c.empty()) return 0;
-  std::nth_element(c.begin(), c.begin() + static_cast<long>(c.size() / 2), c.end());
-  return c[c.size() / 2];
+  return upperMedian(c);
 }
 
 /// Column of track `t` at `row`, linear between its points (rows outside: its end's column).
@@ -87,8 +84,7 @@ double courseMismatch(const Track& a, const Track& b, double curvature, double* 
     std::vector<double> d;
     for (const Centre& c : pb)
       if (c.row <= a.lastRow()) d.push_back(std::abs(c.u - columnAt(a, c.row)));
-    std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-    return d[d.size() / 2];
+    return upperMedian(d);
   }
   const std::vector<Centre> end_a(pa.end() - static_cast<long>(std::min(kFit, pa.size())),
                                   pa.end());

@@ -9,6 +9,13 @@
 
 namespace multislit {
 
+/// The value at position size / 2 of `values` in order (the upper median); `values` not empty.
+inline double upperMedian(std::vector<double> values) {
+  const auto mid = values.begin() + static_cast<long>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
 /// A slit's centre on one image row, and its profile's width there.
 struct Centre {
   int row;

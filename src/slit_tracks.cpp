@@ -165,10 +165,7 @@ std::vector<Track> selectSlits(std::vector<Track> tracks, const ReferenceConfig&
   for (std::size_t k = 1; k < tracks.size(); ++k)
     spacing.push_back(across(tracks[k], normal) - across(tracks[k - 1], normal));
   if (!spacing.empty()) {
-    std::vector<double> sorted = spacing;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
-                     sorted.end());
-    const double median = sorted[sorted.size() / 2];
+    const double median = upperMedian(spacing);
     for (std::size_t k = 0; k < spacing.size(); ++k)
       if (spacing[k] < 0.5 * median)
         throw std::runtime_error(what + ": two slit-like tracks (" + describe({tracks[k]}) +
@@ -265,8 +262,7 @@ bool toSlit(const Track& t, const ReferenceConfig& config, ReferenceSlit* slit, 
   auto narrowness = [&](std::size_t from) {
     std::vector<double> w;
     for (std::size_t i = from; i < from + near; ++i) w.push_back(t.points[i].width);
-    std::nth_element(w.begin(), w.begin() + static_cast<long>(w.size() / 2), w.end());
-    return 0.85 * w[w.size() / 2];
+    return 0.85 * upperMedian(w);
   };
   const double narrow_first = narrowness(0), narrow_last = narrowness(n - near);
   std::vector<bool> inlier;
@@ -321,9 +317,7 @@ double stripeWidth(const cv::Mat& image, double min_contrast) {
     }
   }
   if (widths.empty()) return 0;
-  std::nth_element(widths.begin(), widths.begin() + static_cast<long>(widths.size() / 2),
-                   widths.end());
-  const double measured = widths[widths.size() / 2], smear = kFwhmPerSigma * kSmooth;
+  const double measured = upperMedian(widths), smear = kFwhmPerSigma * kSmooth;
   return std::sqrt(std::max(measured * measured - smear * smear, 1.0));
 }
 
@@ -338,8 +332,7 @@ double imageNoise(const cv::Mat& image) {
       d.push_back(std::abs(p[x] - 0.5 * (p[x - 1] + p[x + 1])));
   }
   if (d.empty()) return 0;
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return 1.4826 * d[d.size() / 2] / std::sqrt(1.5);  // the second difference has 1.5 variances
+  return 1.4826 * upperMedian(d) / std::sqrt(1.5);  // the second difference has 1.5 variances
 }
 
 DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
