@@ -8,8 +8,9 @@
 #include "multislit/floor_detector.h"
 #include "multislit/obstacles.h"
 #include "multislit/occupancy_map.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/pipeline.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 
 #include <octomap/OcTree.h>
 #include <pcl/ModelCoefficients.h>
@@ -47,6 +48,7 @@ struct BenchInput {
   std::string label;  ///< scenario or folder
   int scale = 1;      ///< points per frame, times the paper's sensor
   Reference reference;
+  SensorConfig sensor;  ///< the sensor and its mount on the robot
   std::vector<cv::Mat> images;
   std::vector<Eigen::Isometry3d> world_from_camera;  ///< per frame: odometry and mount
   Eigen::Isometry3d robot_from_camera = Eigen::Isometry3d::Identity();
@@ -88,6 +90,8 @@ BenchInput simulated(const std::string& scenario, long frames, double step, int 
   in.reference.setNominalScale(sensor, s.reference_mount);
   in.robot_from_camera = sim.geometry().robotFromCamera(s.mount);
   in.light_origin = sim.geometry().projectorCentre();
+  in.sensor = sensor;
+  in.sensor.mount = s.mount;
   cli::Progress progress(static_cast<std::size_t>(frames),
                          "render x" + std::to_string(scale) + " " + s.name);
   for (long k = 0; k < frames; ++k) {
@@ -136,6 +140,7 @@ BenchInput recorded(const cli::ArgParser& args) {
   const SensorGeometry geometry(sensor);
   in.robot_from_camera = geometry.robotFromCamera(sensor.mount);
   in.light_origin = geometry.projectorCentre();
+  in.sensor = sensor;
   const std::vector<double> x = robotPositions(dir, files.size());
   for (std::size_t k = 0; k < files.size(); ++k) {
     in.images.push_back(readMonoImage(files[k]));
@@ -242,45 +247,44 @@ bool hasXYZ(const PointRDM& p) {
 /// Stage times of a path over every pass, and what it detected in the first pass.
 struct PathRun {
   StageTimes extract, floor, clusters, map;
+  StageTimes walker;  ///< footsteps and decision (ours only)
   std::vector<Detection> detections;
   double valid_points = 0;  ///< per frame, mean
 };
 
-/// Our pipeline, stage by stage as a walking robot runs it: extraction, floor fit and
-/// classification (FloorDetector::detect labels every point), obstacle clusters, map update.
+/// Our pipeline as a walking robot runs it: extraction, then multislit::Pipeline (floor fit and
+/// classification, obstacle clusters, map update, footsteps and decision), each stage timed.
 PathRun runOurs(const BenchInput& in, int passes) {
   const std::size_t n = in.images.size();
-  PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), {}, 0};
+  PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), {}, 0};
   run.detections.resize(n);
   const Extractor extractor(in.reference);
-  const FloorDetector detector;
-  const ObstacleClusterer clusterer;
+  PipelineConfig config;
+  config.sensor = in.sensor;
+  const Eigen::Isometry3d camera_from_robot = in.robot_from_camera.inverse();
   auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
   for (int pass = -1; pass < passes; ++pass) {  // pass -1: warm-up, not timed
-    OccupancyMap map;                           // each pass maps the same walk from scratch
+    Pipeline pipeline(config);                  // each pass maps the same walk from scratch
     for (std::size_t k = 0; k < n; ++k) {
-      const double t0 = threadSeconds();  // each stage as the pipeline calls it
+      const double t0 = threadSeconds();
       const ExtractionStats stats = extractor.extract(in.images[k], *cloud);
       const double t1 = threadSeconds();
-      const FloorResult floor = detector.detect(cloud);
-      const double t2 = threadSeconds();
-      const ObstacleResult obstacles = clusterer.cluster(cloud, floor, in.robot_from_camera);
-      const double t3 = threadSeconds();
-      map.insertFrame(*cloud, floor, obstacles, in.world_from_camera[k], in.light_origin);
-      const double t4 = threadSeconds();
+      const PipelineResult r = pipeline.process(
+          {cloud, in.world_from_camera[k] * camera_from_robot, in.robot_from_camera});
       if (pass < 0) continue;
       run.extract.add(k, t1 - t0);
-      run.floor.add(k, t2 - t1);
-      run.clusters.add(k, t3 - t2);
-      run.map.add(k, t4 - t3);
+      run.floor.add(k, r.times.floor);
+      run.clusters.add(k, r.times.obstacles);
+      run.map.add(k, r.times.map);
+      run.walker.add(k, r.times.walker);
       if (pass > 0) continue;
       run.valid_points += static_cast<double>(stats.valid) / static_cast<double>(n);
       Detection& d = run.detections[k];
-      d.found = floor.found;
-      for (const int i : floor.obstacles)
+      d.found = r.floor.found;
+      for (const int i : r.floor.obstacles)
         if (hasXYZ((*cloud)[static_cast<std::size_t>(i)])) d.obstacle_points.push_back(i);
       std::sort(d.obstacle_points.begin(), d.obstacle_points.end());
-      d.clusters = obstacles.obstacles.size();
+      d.clusters = r.obstacles.obstacles.size();
     }
   }
   return run;
@@ -358,7 +362,7 @@ void stockMap(const StockPath& s, const Eigen::Isometry3d& world_from_camera,
 /// SACSegmentation, EuclideanClusterExtraction on a KdTree, OcTree::insertPointCloud.
 PathRun runStock(const BenchInput& in, int passes, double threshold) {
   const std::size_t n = in.images.size();
-  PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), {}, 0};
+  PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(0), {}, 0};
   run.detections.resize(n);
   const Extractor extractor(in.reference);
   StockPath stock(threshold);
@@ -493,6 +497,7 @@ std::vector<Row> rowsOf(const ScaleResult& r) {
           {"floor fit + classify", a.floor, b.floor},
           {"clusters", a.clusters, b.clusters},
           {"map update", a.map, b.map},
+          {"footsteps + decision", a.walker, b.walker},
           {"image to floor", StageTimes::sumOf({&a.extract, &a.floor}),
            StageTimes::sumOf({&a.extract, &b.floor})},
           {"image to clusters", StageTimes::sumOf({&a.extract, &a.floor, &a.clusters}),

@@ -2,9 +2,9 @@
 #include "cli.h"
 #include "commands.h"
 
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
-#include "multislit/sources.h"
+#include "multislit/sim/camera_emulator.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 
 #include <chrono>
 #include <csignal>

@@ -3,9 +3,9 @@
 #include "commands.h"
 #include "common.h"
 
-#include "multislit/photometry.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/photometry.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 
 #include <opencv2/imgcodecs.hpp>
 

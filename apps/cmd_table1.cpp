@@ -6,8 +6,8 @@
 
 #include "multislit/extractor.h"
 #include "multislit/plane_model.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,9 +5,10 @@
 #include "commands.h"
 #include "common.h"
 #include "plot.h"
+#include "recording.h"
 #include "walk_figures.h"
 
-#include "multislit/walk.h"
+#include "multislit/sim/walk.h"
 
 #include <chrono>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace multislit::apps {
@@ -33,6 +35,9 @@ void declareOptions(cli::ArgParser& args) {
   args.option("cluster", "grid", "obstacle grouping: grid (RDMap neighbours) or euclidean");
   args.option("screw", "", "X,Y: add a screw head 6 mm across, 2 mm high, at world (X, Y) [m]");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("record", "",
+              "DIR: also write the walk as a recording (frames, odometry.csv, calibration.yaml) "
+              "that multislit map --sequence DIR replays");
   args.flag("no-ball", "no ball is thrown in");
   args.flag("no-cable", "no LAN cable on the floor");
   args.flag("synthesize",
@@ -42,8 +47,8 @@ void declareOptions(cli::ArgParser& args) {
 
 WalkConfig configFromArgs(const cli::ArgParser& args) {
   WalkConfig c;
-  if (args.has("sensor")) c.sensor = SensorConfig::load(args.str("sensor"));
-  c.reference_mount = c.sensor.mount;
+  if (args.has("sensor")) c.pipeline.sensor = SensorConfig::load(args.str("sensor"));
+  c.reference_mount = c.pipeline.sensor.mount;
   c.render = !args.has("synthesize");
   c.render_config.seed = static_cast<std::uint64_t>(args.integer("seed"));
   c.synth.seed = c.render_config.seed;
@@ -51,12 +56,12 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
   c.scene.cable = !args.has("no-cable");
   c.scene.ball_frame = static_cast<int>(args.integer("ball-frame"));
   c.scene.ball_roll_frame = c.scene.ball_frame + 60;
-  c.foot.step_length = args.number("step-length");
+  c.pipeline.foot.step_length = args.number("step-length");
   c.gait.step_frames = static_cast<int>(args.integer("step-frames"));
   const std::string cluster = args.str("cluster");
   if (cluster != "grid" && cluster != "euclidean")
     throw cli::UsageError("--cluster must be grid or euclidean");
-  c.obstacles.method = cluster == "grid" ? ClusterMethod::Grid : ClusterMethod::Euclidean;
+  c.pipeline.obstacles.method = cluster == "grid" ? ClusterMethod::Grid : ClusterMethod::Euclidean;
   if (args.has("screw")) {
     double x = 0, y = 0;
     if (std::sscanf(args.str("screw").c_str(), "%lf,%lf", &x, &y) != 2)
@@ -222,7 +227,7 @@ void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
     for (const ObjectView& o : f.objects) objects.push_back(o.object);
     const WalkConfig& c = walk.config();
     r.events.push_back(head + describeMotion(f, objects, walk.gait().turnDirection(),
-                                             c.walker.stop_frames / c.gait.frame_rate));
+                                             c.pipeline.walker.stop_frames / c.gait.frame_rate));
     r.motion = f.motion;
   }
 }
@@ -254,10 +259,11 @@ std::string summary(const Recorder& r, const WalkSimulation& walk, double second
                 "(%.0f mm/s), turns %.0f deg per step\n",
                 frames, c.gait.frame_rate,
                 c.render ? "rendered images" : "RDMaps synthesized from the ground truth",
-                static_cast<unsigned long long>(c.render_config.seed), 1e3 * c.foot.foot_length,
-                1e3 * c.foot.foot_width, 1e3 * c.foot.foot_separation, 1e3 * c.foot.step_length,
-                c.gait.step_frames / c.gait.frame_rate, 1e3 * c.gait.speed(c.foot),
-                c.foot.turn_step);
+                static_cast<unsigned long long>(c.render_config.seed),
+                1e3 * c.pipeline.foot.foot_length, 1e3 * c.pipeline.foot.foot_width,
+                1e3 * c.pipeline.foot.foot_separation, 1e3 * c.pipeline.foot.step_length,
+                c.gait.step_frames / c.gait.frame_rate, 1e3 * c.gait.speed(c.pipeline.foot),
+                c.pipeline.foot.turn_step);
   o << s << "what appeared, and when it was detected (frame numbers; +n: frames later):\n";
   const auto frameAfter = [](int frame, int since) {
     if (frame < 0) return std::string("never");
@@ -293,9 +299,9 @@ std::string summary(const Recorder& r, const WalkSimulation& walk, double second
                 "time: %.0f s in all; per frame %.1f ms %s, %.2f ms floor + obstacles + map + "
                 "walker\n",
                 r.top.footsteps.size(), touched, 1e3 * closest, walked, end.x, end.y,
-                end.yaw / kDeg, walk.map().occupiedCount(), 1e3 * c.map.resolution,
-                walk.map().leafCount(), walk.map().memoryUsage() / 1e3, c.map.window_half_size,
-                seconds, 1e3 * r.measure_s / frames,
+                end.yaw / kDeg, walk.map().occupiedCount(), 1e3 * c.pipeline.map.resolution,
+                walk.map().leafCount(), walk.map().memoryUsage() / 1e3,
+                c.pipeline.map.window_half_size, seconds, 1e3 * r.measure_s / frames,
                 c.render ? "rendering and extracting" : "synthesizing", 1e3 * r.process_s / frames);
   o << s << "outputs in " << out
     << ": obstacles.csv, fig15_obstacle_points.png, rdmap_*.png (Fig. 14), map.bt, "
@@ -312,7 +318,8 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
     char title[160];
     std::snprintf(title, sizeof title, "Fig. 14: RDMap of frame %llu, the floor plane and the %s",
                   static_cast<unsigned long long>(rec.best.frame), name.c_str());
-    drawRDMapFigure((out / ("rdmap_" + name + ".png")).string(), title, rec.best);
+    drawRDMapFigure((out / ("rdmap_" + name + ".png")).string(), title, *rec.best.cloud,
+                    rec.best.floor);
     char note[96];
     std::snprintf(note, sizeof note, "%s (frames %d-%d)", name.c_str(), rec.first_detected,
                   rec.last_detected);
@@ -346,14 +353,21 @@ int runWalk(int argc, char** argv) {
   r.csv.open(out / "obstacles.csv");
   if (!r.csv) throw std::runtime_error("cannot write " + (out / "obstacles.csv").string());
   writeCsvHeader(r.csv);
+  std::optional<SequenceRecorder> recording;
+  if (args.has("record")) {
+    if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
+    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor);
+  }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
   for (long k = 0; k < frames; ++k) {
     const WalkFrame f = walk.step();
+    if (recording) recording->add(f.image, f.stamp_us, f.world_from_torso);
     record(r, f, walk);
     trackBall(r, f, walk);
     progress.update(static_cast<std::size_t>(k + 1));
   }
   progress.finish();
+  if (recording) recording->finish();
   r.csv.close();
   writeFigures(r, walk, out);
   const double seconds =

@@ -11,5 +11,6 @@ int runRdmap(int argc, char** argv);
 int runDetect(int argc, char** argv);
 int runTable1(int argc, char** argv);
 int runBench(int argc, char** argv);
+int runMap(int argc, char** argv);
 
 }  // namespace multislit::apps

@@ -5,6 +5,7 @@
 //   multislit emulate &   multislit_grabber_example --camera 127.0.0.1 --calibration calib.yaml
 //   multislit_grabber_example --sequence out/simulate --calibration calib.yaml --save clouds
 #include <multislit/grabber.h>
+#include <multislit/sim/simulated_source.h>
 #include <multislit/sources.h>
 
 #include <pcl/console/parse.h>

@@ -17,6 +17,9 @@ struct Command {
 const Command kCommands[] = {
     {"walk", "the paper's walking experiment: a simulated HOAP-2 avoids a ball and a cable",
      multislit::apps::runWalk},
+    {"map",
+     "the whole chain on a camera, a recording or the simulator, with odometry: map, decisions",
+     multislit::apps::runMap},
     {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
      multislit::apps::runSimulate},
     {"emulate", "serve the simulator's images of a walk as a GigE Vision camera on 127.0.0.1",

@@ -63,9 +63,8 @@ RDMapView viewOf(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floo
 
 }  // namespace
 
-void drawRDMapFigure(const std::string& path, const std::string& title, const WalkFrame& frame) {
-  const pcl::PointCloud<PointRDM>& cloud = *frame.cloud;
-  const FloorResult& floor = frame.floor;
+void drawRDMapFigure(const std::string& path, const std::string& title,
+                     const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor) {
   const RDMapView view = viewOf(cloud, floor);
   cv::Mat img(720, 1200, CV_8UC3, kWhite);
   const auto plane = [&](double u, double v) {

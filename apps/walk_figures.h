@@ -2,10 +2,13 @@
 // the paper's Fig. 14, and the occupancy map from above with the path and every footstep.
 #pragma once
 
+#include "multislit/floor_detector.h"
 #include "multislit/footsteps.h"
 #include "multislit/occupancy_map.h"
-#include "multislit/scene.h"
-#include "multislit/walk.h"
+#include "multislit/point_types.h"
+#include "multislit/sim/scene.h"
+
+#include <pcl/point_cloud.h>
 
 #include <string>
 #include <vector>
@@ -14,7 +17,8 @@ namespace multislit::apps {
 
 /// Fig. 14: the RDMap of one frame in a 2.5D view (u across, v into the picture, dk up), the
 /// fitted floor plane light green, floor points green, obstacle points red.
-void drawRDMapFigure(const std::string& path, const std::string& title, const WalkFrame& frame);
+void drawRDMapFigure(const std::string& path, const std::string& title,
+                     const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor);
 
 /// What the top view shows besides the map.
 struct TopViewContent {

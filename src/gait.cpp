@@ -16,18 +16,6 @@ constexpr detail::FieldCheck require("GaitConfig");
 
 }  // namespace
 
-const char* commandName(Command command) {
-  switch (command) {
-    case Command::Walk:
-      return "walk";
-    case Command::Turn:
-      return "turn";
-    case Command::Stop:
-      return "stop";
-  }
-  return "?";
-}
-
 void GaitConfig::validate() const {
   require(frame_rate > 0, "frame_rate", "must be > 0 Hz");
   require(step_frames >= 2, "step_frames", "must be >= 2");

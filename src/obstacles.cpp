@@ -110,8 +110,6 @@ void ObstacleClustererConfig::validate() const {
   require(tolerance > 0 && tolerance < 1, "tolerance", "must be in (0, 1) m");
   require(min_points >= 1, "min_points", "must be >= 1");
   require(min_run >= 1, "min_run", "must be >= 1");
-  require(feet_half_length >= 0, "feet_half_length", "must be >= 0 m");
-  require(feet_half_width >= 0, "feet_half_width", "must be >= 0 m");
 }
 
 std::size_t ObstacleResult::pointCount() const {
@@ -152,8 +150,10 @@ MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::In
   return floor;
 }
 
-ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config) : config_(config) {
+ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config, const FootConfig& feet)
+    : config_(config), feet_(feet) {
   config_.validate();
+  feet_.validate();
 }
 
 namespace {
@@ -297,8 +297,8 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
     o.min = o.min.cwiseMin(robot);
     o.max = o.max.cwiseMax(robot);
     heights.push_back(metric.valid ? metric.height(camera) : robot.z());
-    const double dx = std::max(0.0, std::abs(robot.x()) - config_.feet_half_length);
-    const double dy = std::max(0.0, std::abs(robot.y()) - config_.feet_half_width);
+    const double dx = std::max(0.0, std::abs(robot.x()) - feet_.toe());
+    const double dy = std::max(0.0, std::abs(robot.y()) - feet_.halfWidth());
     o.distance = std::min(o.distance, std::hypot(dx, dy));
   }
   o.slits = static_cast<int>(slits.size());

@@ -54,26 +54,6 @@ void OccupancyMapConfig::validate() const {
   require(crop_interval >= 1, "crop_interval", "must be >= 1 frame");
 }
 
-Footprint Footprint::inflated(double margin) const {
-  Footprint f = *this;
-  f.length += 2 * margin;
-  f.width += 2 * margin;
-  return f;
-}
-
-std::array<Eigen::Vector2d, 4> Footprint::corners() const {
-  const Eigen::Vector2d along(std::cos(yaw), std::sin(yaw)), across(-along.y(), along.x());
-  const Eigen::Vector2d a = 0.5 * length * along, b = 0.5 * width * across;
-  return {centre + a + b, centre - a + b, centre - a - b, centre + a - b};
-}
-
-bool Footprint::contains(const Eigen::Vector2d& p) const {
-  const Eigen::Vector2d d = p - centre;
-  const double along = d.x() * std::cos(yaw) + d.y() * std::sin(yaw);
-  const double across = -d.x() * std::sin(yaw) + d.y() * std::cos(yaw);
-  return std::abs(along) <= 0.5 * length && std::abs(across) <= 0.5 * width;
-}
-
 /// One frame's evidence: a mark per point (its voxel and kind) and per cell of a light ray, as
 /// (packed key << 2 | kind) so that sorting gathers the marks of each voxel.
 struct OccupancyMap::FrameEvidence {

@@ -17,6 +17,18 @@ constexpr detail::FieldCheck require("WalkerConfig");
 
 }  // namespace
 
+const char* commandName(Command command) {
+  switch (command) {
+    case Command::Walk:
+      return "walk";
+    case Command::Turn:
+      return "turn";
+    case Command::Stop:
+      return "stop";
+  }
+  return "?";
+}
+
 const char* reasonName(Reason reason) {
   switch (reason) {
     case Reason::PathClear:

@@ -2,8 +2,8 @@
 // judged against the simulator's ground truth.
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

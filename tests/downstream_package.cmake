@@ -35,3 +35,4 @@ run(configure ${CMAKE_COMMAND} -S ${DOWNSTREAM_SOURCE_DIR} -B ${build} -G ${GENE
     -DCMAKE_FIND_PACKAGE_NO_PACKAGE_REGISTRY=ON ${flags})
 run(build ${CMAKE_COMMAND} --build ${build})
 run(run ${build}/downstream)
+run(run_core ${build}/downstream_core)

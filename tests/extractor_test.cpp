@@ -1,7 +1,7 @@
 // From simulated images to RDMaps, measured against the simulator's ground truth.
 #include "multislit/extractor.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 #include "multislit/slit_profile.h"
 #include "test_support.h"
 

@@ -1,6 +1,8 @@
 // MultiSlitGrabber: PCL signals, headers, back-pressure, stop() from callbacks and with sources
 // that hang, and end to end over GigE Vision on 127.0.0.1 (CameraEmulator + AravisSource).
 #include "multislit/grabber.h"
+#include "multislit/sim/camera_emulator.h"
+#include "multislit/sim/simulated_source.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>

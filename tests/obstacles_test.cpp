@@ -2,8 +2,8 @@
 #include "multislit/obstacles.h"
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
-#include "multislit/rdmap_synth.h"
-#include "multislit/scenarios.h"
+#include "multislit/sim/rdmap_synth.h"
+#include "multislit/sim/scenarios.h"
 
 #include <gtest/gtest.h>
 
@@ -240,4 +240,23 @@ TEST(ObstacleClusterer, ConfigErrorsNameTheField) {
   config = {};
   config.tolerance = 0;
   EXPECT_THROW(ObstacleClusterer{config}, std::invalid_argument);
+}
+
+// The feet are described once (FootConfig): a longer step puts the leading toe farther ahead, so
+// the same ball is nearer to the feet by exactly the toe's advance, and the walker's
+// sudden-obstacle zone (near_distance from the feet) reaches that much farther ahead.
+TEST(Obstacles, TheStepLengthMovesTheFeetTheDistanceIsMeasuredFrom) {
+  const Seen s = look(ballScene(), ClusterMethod::Grid);
+  const MountConfig mount;
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(mount);
+  FootConfig shortStep, longStep;
+  longStep.step_length = 0.08;
+  const ObstacleResult a = ObstacleClusterer({}, shortStep).cluster(s.cloud, s.floor, pose);
+  const ObstacleResult b = ObstacleClusterer({}, longStep).cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(a.obstacles.size(), 1u);
+  ASSERT_EQ(b.obstacles.size(), 1u);
+  EXPECT_GT(a.obstacles[0].distance, 0.03);
+  EXPECT_NEAR(a.obstacles[0].distance - b.obstacles[0].distance, longStep.toe() - shortStep.toe(),
+              1e-9);
+  EXPECT_NEAR(longStep.toe() - shortStep.toe(), 0.02, 1e-12);
 }

@@ -1,7 +1,7 @@
 // The occupancy map: evidence over frames (a screw too small for one frame), free space clearing a
 // ball that rolled away, no cells from noise, .bt files, bounded memory, footprint queries.
 #include "multislit/occupancy_map.h"
-#include "multislit/walk.h"
+#include "multislit/sim/walk.h"
 #include "test_support.h"
 
 #include <octomap/OcTree.h>

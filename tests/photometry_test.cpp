@@ -1,7 +1,7 @@
 // Photometric variety of the simulator (speckle, stripe width, gamma, floors, presets, random
 // draws) measured on renders of a 320 x 240 window of the paper's sensor, against exact truth.
-#include "multislit/photometry.h"
-#include "multislit/scenarios.h"
+#include "multislit/sim/photometry.h"
+#include "multislit/sim/scenarios.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>

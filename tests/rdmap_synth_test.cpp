@@ -1,8 +1,8 @@
 // The RDMap synthesizer against the real thing: the same frame rendered and extracted.
-#include "multislit/rdmap_synth.h"
+#include "multislit/sim/rdmap_synth.h"
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
-#include "multislit/scenarios.h"
+#include "multislit/sim/scenarios.h"
 
 #include <gtest/gtest.h>
 

@@ -4,9 +4,9 @@
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
 #include "multislit/obstacles.h"
-#include "multislit/photometry.h"
-#include "multislit/scenarios.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/photometry.h"
+#include "multislit/sim/scenarios.h"
+#include "multislit/sim/simulator.h"
 #include "paper_method.h"
 #include "test_support.h"
 

@@ -1,6 +1,6 @@
 // Ray casting against the scene primitives, and scene files.
-#include "multislit/scene.h"
-#include "multislit/scenarios.h"
+#include "multislit/sim/scene.h"
+#include "multislit/sim/scenarios.h"
 
 #include <gtest/gtest.h>
 

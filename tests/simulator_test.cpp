@@ -1,6 +1,6 @@
 // The simulator against its own exact ground truth.
-#include "multislit/simulator.h"
-#include "multislit/scenarios.h"
+#include "multislit/sim/simulator.h"
+#include "multislit/sim/scenarios.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>

@@ -1,6 +1,8 @@
 // Frame sources: recorded images (time stamps, pacing, stepping), the simulator, and a GigE
 // Vision camera through Aravis, served on 127.0.0.1 by CameraEmulator (never discovered).
 #include "multislit/sources.h"
+#include "multislit/sim/camera_emulator.h"
+#include "multislit/sim/simulated_source.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>

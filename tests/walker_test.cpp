@@ -4,8 +4,8 @@
 #include "multislit/walker.h"
 #include "multislit/footsteps.h"
 #include "multislit/gait.h"
-#include "multislit/rdmap_synth.h"
-#include "multislit/walk.h"
+#include "multislit/sim/rdmap_synth.h"
+#include "multislit/sim/walk.h"
 
 #include <gtest/gtest.h>
 
@@ -90,7 +90,7 @@ TEST(Walk, PaperExperimentStopsForTheBallAndTurnsAwayFromTheCable) {
   EXPECT_GE(log.first_stop, scene.ball_frame);
   EXPECT_LE(log.first_stop, scene.ball_frame + 3);
   EXPECT_EQ(log.sudden_stops, 1);  // the cable, seen far ahead first, never stops it
-  EXPECT_EQ(log.stop_frames, sim.config().walker.stop_frames);
+  EXPECT_EQ(log.stop_frames, sim.config().pipeline.walker.stop_frames);
   // The cable, first seen far ahead, blocks the footsteps: the robot turns left and walks on.
   ASSERT_GE(log.cable_lit, 0);
   EXPECT_GT(log.first_turn, log.cable_lit);
@@ -119,7 +119,8 @@ TEST(Walk, EmptyFloorFor1000FramesNeverStopsOrTurns) {
   for (int k = 0; k < 1000; ++k) not_walking += sim.step().walker.command != Command::Walk;
   EXPECT_EQ(not_walking, 0);
   const double walked = sim.gait().pose().x;
-  EXPECT_NEAR(walked, 1000 * config.gait.speed(config.foot) / config.gait.frame_rate, 1e-6);
+  EXPECT_NEAR(walked, 1000 * config.gait.speed(config.pipeline.foot) / config.gait.frame_rate,
+              1e-6);
   EXPECT_DOUBLE_EQ(sim.gait().pose().yaw, 0.0);
 }
 

@@ -1,46 +1,15 @@
 // Footsteps of the HOAP-2: where its soles land when it walks straight or turns in place, checked
-// against the occupancy map, and measured against the true objects of a simulated scene.
+// against the occupancy map.
 #pragma once
 
+#include "multislit/feet.h"
 #include "multislit/occupancy_map.h"
-#include "multislit/scene.h"
 
 #include <Eigen/Geometry>
 
 #include <vector>
 
 namespace multislit {
-
-/// The feet and the step of the HOAP-2 (sensor.md). The step length is not published: 40 mm, a
-/// short step for a 50 cm robot that walks slowly while it looks at the floor just ahead.
-struct FootConfig {
-  double foot_length = 0.095;      ///< sole along the walking direction [m]
-  double foot_width = 0.065;       ///< sole across it [m]
-  double foot_separation = 0.078;  ///< between the feet's centres [m]
-  double step_length = 0.040;      ///< the body's advance per step (a foot moves twice it) [m]
-  double turn_step = 10.0;         ///< yaw per step when turning in place [deg]
-
-  double toe() const { return 0.5 * step_length + 0.5 * foot_length; }  ///< leading toe, x [m]
-  void validate() const;  ///< throws std::invalid_argument naming the field
-};
-
-/// The robot on the floor: origin midway between the feet, yaw from world x (counter-clockwise).
-struct Pose2D {
-  double x = 0.0;    ///< [m]
-  double y = 0.0;    ///< [m]
-  double yaw = 0.0;  ///< [rad]
-
-  Eigen::Vector2d position() const { return {x, y}; }
-  /// A point given in the robot frame (x forward, y left), in the world.
-  Eigen::Vector2d toWorld(const Eigen::Vector2d& robot) const;
-  Pose2D movedForward(double distance) const;
-  Pose2D turned(double angle) const;   ///< [rad], positive to the left
-  Eigen::Isometry3d isometry() const;  ///< world from robot, z = 0 on the floor
-};
-
-enum class Foot { Left, Right };
-inline Foot otherFoot(Foot f) { return f == Foot::Left ? Foot::Right : Foot::Left; }
-inline const char* footName(Foot f) { return f == Foot::Left ? "left" : "right"; }
 
 struct Footstep {
   Foot foot = Foot::Left;
@@ -67,9 +36,5 @@ struct FootstepCheck {
 /// floor at 0) under each sole grown by `margin` [m].
 FootstepCheck checkFootsteps(const std::vector<Footstep>& steps, const OccupancyMap& map,
                              double margin, double min_height, double max_height);
-
-/// Horizontal clearance between a sole and an object seen from above (sphere: a disc; cylinder:
-/// a capsule around its axis; box: a rectangle): 0 when they overlap [m].
-double clearance(const Footprint& sole, const SceneObject& object);
 
 }  // namespace multislit

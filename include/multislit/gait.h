@@ -4,16 +4,13 @@
 
 #include "multislit/footsteps.h"
 #include "multislit/sensor.h"
+#include "multislit/walker.h"
 
 #include <Eigen/Geometry>
 
 #include <optional>
 
 namespace multislit {
-
-/// What the robot does during one frame.
-enum class Command { Walk, Turn, Stop };
-const char* commandName(Command command);
 
 struct GaitConfig {
   double frame_rate = 30.0;  ///< sensor frames per second (the paper: more than 30 Hz) [Hz]

@@ -4,6 +4,7 @@
 // EuclideanClusterExtraction on a FLANN k-d tree.
 #pragma once
 
+#include "multislit/feet.h"
 #include "multislit/floor_detector.h"
 #include "multislit/point_types.h"
 
@@ -44,13 +45,7 @@ struct ObstacleClustererConfig {
   /// allowed): an object lifts a run of rows, while noise that passes the threshold is scattered,
   /// and the grid grouping's gaps of up to max_gap rows would otherwise chain it into groups.
   /// 1: no such rule.
-  int min_run = 3;  ///< [points]
-  /// The feet, seen from above in the robot frame: |x| <= feet_half_length, |y| <=
-  /// feet_half_width. Obstacle::distance is measured from this rectangle. Defaults: the HOAP-2
-  /// sole (95 x 65 mm), feet 78 mm apart, the leading foot half a 40 mm step ahead.
-  double feet_half_length = 0.0675;  ///< [m]
-  double feet_half_width = 0.0715;   ///< [m]
-
+  int min_run = 3;        ///< [points]
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
@@ -64,7 +59,7 @@ struct Obstacle {
   double length = 0.0;                                 ///< size along the walking direction (x) [m]
   double width = 0.0;         ///< size across the walking direction (y) [m]
   double height = 0.0;        ///< highest point above the floor plane [m]
-  double distance = 0.0;      ///< nearest point to the feet rectangle, horizontally [m]
+  double distance = 0.0;      ///< nearest point to the feet (FootConfig::toe, halfWidth) [m]
   double max_residual = 0.0;  ///< largest |dk - plane| of its points [px]
   int slits = 0;              ///< slits it lies on [-]
   std::size_t pointCount() const { return indices.size(); }
@@ -95,9 +90,12 @@ MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::In
 /// Groups the obstacle points of a FloorResult into obstacles. Thread-safe: keeps no state.
 class ObstacleClusterer {
  public:
-  explicit ObstacleClusterer(const ObstacleClustererConfig& config = {});  ///< validates
+  /// `feet`: the robot's feet, which Obstacle::distance is measured from. Validates both.
+  explicit ObstacleClusterer(const ObstacleClustererConfig& config = {},
+                             const FootConfig& feet = {});
 
   const ObstacleClustererConfig& config() const { return config_; }
+  const FootConfig& feet() const { return feet_; }
 
   /// The obstacles of `cloud` (an organized RDMap with metric x, y, z) given its floor.
   /// `robot_from_camera` places them in the robot frame (SensorGeometry::robotFromCamera of the
@@ -116,6 +114,7 @@ class ObstacleClusterer {
                     const Eigen::Isometry3d& robot_from_camera) const;
 
   ObstacleClustererConfig config_;
+  FootConfig feet_;
 };
 
 }  // namespace multislit

@@ -4,6 +4,7 @@
 // and free-space updates clear an object that has gone (a ball that rolled away).
 #pragma once
 
+#include "multislit/feet.h"
 #include "multislit/floor_detector.h"
 #include "multislit/obstacles.h"
 #include "multislit/point_types.h"
@@ -69,18 +70,6 @@ struct OccupancyMapConfig {
   int crop_interval = 90;         ///< frames between two crops of the window (3 s) [-]
 
   void validate() const;  ///< throws std::invalid_argument naming the field
-};
-
-/// A rectangle on the floor (a foot's sole), world frame.
-struct Footprint {
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< [m]
-  double yaw = 0.0;                                  ///< direction of its length from world x [rad]
-  double length = 0.0;                               ///< along yaw [m]
-  double width = 0.0;                                ///< across [m]
-
-  Footprint inflated(double margin) const;  ///< grown by `margin` on every side
-  std::array<Eigen::Vector2d, 4> corners() const;
-  bool contains(const Eigen::Vector2d& p) const;
 };
 
 /// One occupied voxel.

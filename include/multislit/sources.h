@@ -1,12 +1,11 @@
-// Where frames come from: a camera (Aravis: GigE Vision, USB3 Vision), recorded PNG images, or
-// the simulator. MultiSlitGrabber reads any FrameSource on its acquisition thread.
+// Where frames come from: a camera (Aravis: GigE Vision, USB3 Vision) or recorded PNG images (the
+// simulator's source is in multislit::sim, sim/simulated_source.h). MultiSlitGrabber reads any
+// FrameSource on its acquisition thread.
 #pragma once
 
 #include "multislit/frame.h"
 #include "multislit/reference.h"
-#include "multislit/scenarios.h"
 #include "multislit/sensor.h"
-#include "multislit/simulator.h"
 
 #include <atomic>
 #include <chrono>
@@ -136,38 +135,6 @@ class AravisSource : public FrameSource {
   std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0};
 };
 
-/// Aravis's GigE Vision fake camera on 127.0.0.1 (GVCP port 3956) serving images in turn: the
-/// frame with camera frame id k carries image imageIndex(k). For tests, demos and
-/// `multislit emulate`; it answers on the loopback interface only.
-struct EmulatorConfig {
-  std::string serial = "MULTISLIT";  ///< device serial number (at most 15 characters)
-  double fps = 30.0;                 ///< frame rate until a client sets its own [Hz]
-  double lost_packet_ratio = 0.0;    ///< fraction of stream packets not sent [-]
-
-  void validate() const;  ///< throws std::invalid_argument naming the field
-};
-
-class CameraEmulator {
- public:
-  static constexpr const char* kAddress = "127.0.0.1";
-
-  /// `images`: one or more images of the same size and type (CV_8UC1 or CV_16UC1). Throws
-  /// std::invalid_argument for bad images, std::runtime_error when 127.0.0.1:3956 is taken.
-  explicit CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig& config = {});
-  ~CameraEmulator();
-  CameraEmulator(const CameraEmulator&) = delete;
-  CameraEmulator& operator=(const CameraEmulator&) = delete;
-
-  std::size_t imageIndex(std::uint64_t frame_id) const;
-  std::uint64_t framesServed() const;
-  /// 1 makes a camera that answers control requests but sends no image.
-  void setLostPacketRatio(double ratio);
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
-
 // --- recorded images -------------------------------------------------------------------------
 
 struct ImageSequenceConfig {
@@ -216,46 +183,6 @@ class ImageSequenceSource : public FrameSource {
   Clock::time_point started_{};
   std::atomic<bool> finished_{false};
   std::atomic<std::uint64_t> frames_{0}, read_errors_{0};
-};
-
-// --- the simulator ---------------------------------------------------------------------------
-
-struct SimulatorSourceConfig {
-  std::string scenario = "ball";  ///< named scenario (scenarioNames())
-  SensorConfig sensor;            ///< the simulated sensor (its mount is the scenario's)
-  RenderConfig render;            ///< radiometry and noise
-  double fps = 0.0;               ///< frame rate [Hz]; 0: as fast as frames render
-  std::uint64_t first_frame = 0;  ///< walk frame of the first image
-  std::uint64_t frames = 0;       ///< frames to render; 0: endless
-
-  void validate() const;  ///< throws std::invalid_argument naming the field
-};
-
-/// Renders a scenario frame by frame while the robot walks (Scenario::worldFromRobot(frame)).
-class SimulatorSource : public FrameSource {
- public:
-  explicit SimulatorSource(const SimulatorSourceConfig& config = {});
-
-  void start() override;
-  std::optional<Frame> next(std::chrono::milliseconds timeout) override;
-  void stop() override {}
-  std::string name() const override { return "simulator (" + scenario_.name + ")"; }
-  SourceStats stats() const override;
-  bool live() const override { return config_.fps > 0; }
-  bool finished() const override;
-
-  /// The reference for these images: the bare floor at the scenario's reference pose, with the
-  /// nominal metric scale.
-  Reference makeReference(const ReferenceConfig& config = {}) const;
-  const Scenario& scenario() const { return scenario_; }
-  const Simulator& simulator() const { return simulator_; }
-
- private:
-  SimulatorSourceConfig config_;
-  Scenario scenario_;
-  Simulator simulator_;
-  std::atomic<std::uint64_t> rendered_{0};
-  Clock::time_point started_{};
 };
 
 }  // namespace multislit

@@ -4,7 +4,6 @@
 #pragma once
 
 #include "multislit/footsteps.h"
-#include "multislit/gait.h"
 #include "multislit/obstacles.h"
 #include "multislit/occupancy_map.h"
 
@@ -13,6 +12,10 @@
 #include <vector>
 
 namespace multislit {
+
+/// What the robot does during one frame.
+enum class Command { Walk, Turn, Stop };
+const char* commandName(Command command);
 
 struct WalkerConfig {
   /// Footsteps checked ahead. The sensor sees the floor from 0.09 to 0.40 m ahead of the feet'

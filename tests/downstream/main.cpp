@@ -2,8 +2,8 @@
 // ~4500 slit points (more than 4000), and the installed FloorFilter (multislit::filters) keeps
 // the one point that stands 2 px off a plane of 15 slits. Exits non-zero otherwise.
 #include <multislit/floor_filter.h>
-#include <multislit/scenarios.h>
-#include <multislit/simulator.h>
+#include <multislit/sim/scenarios.h>
+#include <multislit/sim/simulator.h>
 
 #include <cstdio>
 

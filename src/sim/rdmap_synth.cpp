@@ -1,4 +1,4 @@
-#include "multislit/rdmap_synth.h"
+#include "multislit/sim/rdmap_synth.h"
 
 #include "multislit/extractor.h"
 

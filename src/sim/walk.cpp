@@ -1,4 +1,4 @@
-#include "multislit/walk.h"
+#include "multislit/sim/walk.h"
 
 #include <algorithm>
 #include <chrono>
@@ -71,15 +71,10 @@ const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
 }
 
 void WalkConfig::validate() const {
-  sensor.validate();
+  pipeline.validate();
   render_config.validate();
   synth.validate();
-  floor.validate();
-  obstacles.validate();
-  map.validate();
-  foot.validate();
   gait.validate();
-  walker.validate();
   scene.validate();
   require(truth_radius > 0, "WalkConfig.truth_radius", "must be > 0 m");
 }
@@ -87,31 +82,33 @@ void WalkConfig::validate() const {
 struct WalkSimulation::Measurement {
   pcl::PointCloud<PointRDM>::Ptr cloud;
   std::vector<SlitCrossing> truth;
+  cv::Mat image;
 };
 
 WalkSimulation::WalkSimulation(const WalkConfig& config, std::optional<Reference> reference)
     : config_(config),
-      geometry_(config.sensor),
-      detector_(config.floor),
-      clusterer_(config.obstacles),
-      map_(config.map),
-      walker_(config.walker, config.foot),
-      gait_(config.gait, config.foot, config.sensor.mount),
+      pipeline_(config.pipeline),
+      gait_(config.gait, config.pipeline.foot, config.pipeline.sensor.mount),
       world_(config.scene, config.gait.frame_rate) {
   config_.validate();
   if (!reference)
-    reference =
-        renderFloorReference(config_.sensor, config_.reference_mount, config_.render_config);
+    reference = renderFloorReference(config_.pipeline.sensor, config_.reference_mount,
+                                     config_.render_config);
   if (config_.render) {
-    simulator_ = std::make_unique<Simulator>(config_.sensor, config_.render_config);
+    simulator_ = std::make_unique<Simulator>(config_.pipeline.sensor, config_.render_config);
     extractor_ = std::make_unique<Extractor>(std::move(*reference));
   } else {
-    synthesizer_ =
-        std::make_unique<RDMapSynthesizer>(config_.sensor, std::move(*reference), config_.synth);
+    synthesizer_ = std::make_unique<RDMapSynthesizer>(config_.pipeline.sensor,
+                                                      std::move(*reference), config_.synth);
   }
 }
 
 WalkSimulation::~WalkSimulation() = default;
+
+const Reference& WalkSimulation::reference() const {
+  if (!extractor_) throw std::logic_error("WalkSimulation::reference: RDMaps are synthesized");
+  return extractor_->reference();
+}
 
 WalkSimulation::Measurement WalkSimulation::measure(const Scene& scene,
                                                     const Eigen::Isometry3d& world_from_camera) {
@@ -121,42 +118,38 @@ WalkSimulation::Measurement WalkSimulation::measure(const Scene& scene,
     return m;
   }
   RenderedFrame rendered = simulator_->render(scene, world_from_camera, frame_);
-  const auto stamp =
-      static_cast<std::uint64_t>(static_cast<double>(frame_) * 1e6 / config_.gait.frame_rate);
-  m.cloud = extractor_->extract(rendered.image, stamp, static_cast<std::uint32_t>(frame_));
+  m.cloud = extractor_->extract(rendered.image, stamp(), static_cast<std::uint32_t>(frame_));
   m.truth = std::move(rendered.truth);
+  m.image = rendered.image;
   return m;
+}
+
+std::uint64_t WalkSimulation::stamp() const {
+  return static_cast<std::uint64_t>(static_cast<double>(frame_) * 1e6 / config_.gait.frame_rate);
 }
 
 WalkFrame WalkSimulation::step() {
   WalkFrame f;
   f.frame = frame_;
-  f.body = gait_.pose();
+  f.stamp_us = stamp();
   f.mount = gait_.mount();
-  const Scene& scene = world_.sceneAt(frame_, f.body);  // the ball may land, roll, be gone
-  const Eigen::Isometry3d robot_from_camera = geometry_.robotFromCamera(f.mount);
-  f.world_from_camera = gait_.worldFromRobot() * robot_from_camera;
+  const Scene& scene = world_.sceneAt(frame_, gait_.pose());  // the ball may land, roll, be gone
+  const Eigen::Isometry3d robot_from_camera = pipeline_.geometry().robotFromCamera(f.mount);
+  f.world_from_torso =
+      gait_.worldFromRobot() * robot_from_camera * pipeline_.geometry().robotFromCamera().inverse();
   // Sec. III-A: the relative disparity map of this frame.
-  auto t0 = std::chrono::steady_clock::now();
-  Measurement m = measure(scene, f.world_from_camera);
+  const auto t0 = std::chrono::steady_clock::now();
+  Measurement m = measure(scene, gait_.worldFromRobot() * robot_from_camera);
   f.cloud = m.cloud;
+  f.image = m.image;
   f.measure_seconds = secondsSince(t0);
-  t0 = std::chrono::steady_clock::now();
-  // Sec. III-B: the floor by RANSAC (eq. 1-3); points farther than 3 sigma are obstacle points.
-  f.floor = detector_.detect(f.cloud);
-  // The obstacle points grouped into obstacles, sized and placed in the robot frame.
-  f.obstacles = clusterer_.cluster(f.cloud, f.floor, robot_from_camera);
-  // Sec. V: an obstacle seen first very near the feet (judged before the map learns it).
-  WalkerObservation seen{f.floor.found, walker_.findSudden(f.obstacles, map_, f.body)};
-  // The map accumulates the frames along the odometry.
-  f.map = map_.insertFrame(*f.cloud, f.floor, f.obstacles, f.world_from_camera,
-                           geometry_.projectorCentre());
-  // The footsteps ahead against the map: walk, turn or stop.
-  f.walker = walker_.step(map_, f.body, gait_.nextFoot(), seen);
+  // Sec. III-B to V: floor, obstacles, map, footsteps and the decision.
+  static_cast<PipelineResult&>(f) =
+      pipeline_.process({m.cloud, gait_.worldFromRobot(), robot_from_camera, gait_.nextFoot()});
+  f.process_seconds = f.times.total();
   // The robot moves: its pose integrates its own commands.
   f.footstep = gait_.advance(f.walker.command, f.walker.turn_direction);
   f.motion = gait_.command();
-  f.process_seconds = secondsSince(t0);
   judge(scene, m.truth, f);
   ++frame_;
   return f;

@@ -6,7 +6,7 @@
 
 #include "multislit/point_types.h"
 #include "multislit/reference.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/simulator.h"
 
 #include <pcl/point_cloud.h>
 

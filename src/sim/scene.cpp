@@ -1,4 +1,4 @@
-#include "multislit/scene.h"
+#include "multislit/sim/scene.h"
 
 #include "yaml_io.h"
 

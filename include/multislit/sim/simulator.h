@@ -1,8 +1,8 @@
 // Image formation of the multi-slit sensor, with exact ground truth for every slit crossing.
 #pragma once
 
-#include "multislit/scene.h"
 #include "multislit/sensor.h"
+#include "multislit/sim/scene.h"
 
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>

@@ -1,4 +1,4 @@
-#include "multislit/photometry.h"
+#include "multislit/sim/photometry.h"
 
 #include "yaml_io.h"
 

@@ -1,5 +1,5 @@
 // SimulatorSource: the simulated sensor filming a scenario while the robot walks.
-#include "multislit/sources.h"
+#include "multislit/sim/simulated_source.h"
 
 #include <stdexcept>
 

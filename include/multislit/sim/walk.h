@@ -4,16 +4,13 @@
 #pragma once
 
 #include "multislit/extractor.h"
-#include "multislit/floor_detector.h"
-#include "multislit/footsteps.h"
 #include "multislit/gait.h"
-#include "multislit/obstacles.h"
-#include "multislit/occupancy_map.h"
-#include "multislit/rdmap_synth.h"
+#include "multislit/pipeline.h"
 #include "multislit/reference.h"
-#include "multislit/scene.h"
-#include "multislit/simulator.h"
-#include "multislit/walker.h"
+#include "multislit/sim/rdmap_synth.h"
+#include "multislit/sim/scene.h"
+#include "multislit/sim/simulator.h"
+#include "multislit/sim/truth.h"
 
 #include <pcl/point_cloud.h>
 
@@ -63,17 +60,14 @@ class WalkWorld {
 };
 
 struct WalkConfig {
-  SensorConfig sensor;           ///< its mount is the nominal mount on the robot
+  /// The robot's chain: its sensor (whose mount is the nominal mount on the robot), floor,
+  /// obstacles, map, feet and walker.
+  PipelineConfig pipeline;
   MountConfig reference_mount;   ///< where the reference image of the floor is taken
   bool render = true;            ///< true: render and extract images; false: synthesize
   RenderConfig render_config;    ///< images (render = true)
   RDMapSynthesizerConfig synth;  ///< RDMaps (render = false)
-  FloorDetectorConfig floor;
-  ObstacleClustererConfig obstacles;
-  OccupancyMapConfig map;
-  FootConfig foot;
   GaitConfig gait;
-  WalkerConfig walker;
   WalkSceneConfig scene;
   /// Within this of an object, an obstacle point is a detection of that object (judging only).
   double truth_radius = 0.01;  ///< [m]
@@ -89,23 +83,23 @@ struct ObjectView {
   std::size_t detected = 0;  ///< points of obstacles within truth_radius of it
 };
 
-/// Everything one frame did.
-struct WalkFrame {
+/// Everything one frame did: the pipeline's result (body, floor, obstacles, map update, decision)
+/// and what the simulated robot and the ground truth add to it.
+struct WalkFrame : PipelineResult {
   std::uint64_t frame = 0;
-  Pose2D body;        ///< the robot during the frame
-  MountConfig mount;  ///< the sensor's mount, sway included
-  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+  std::uint64_t stamp_us = 0;  ///< the frame's time from the start of the walk [us]
+  MountConfig mount;           ///< the sensor's mount, sway included
+  /// The torso's pose, world from robot with the sway: with the sensor's nominal mount it gives
+  /// world_from_camera. What odometry of this walk records (a replay sees the same camera poses).
+  Eigen::Isometry3d world_from_torso = Eigen::Isometry3d::Identity();
   pcl::PointCloud<PointRDM>::Ptr cloud;  ///< the RDMap
-  FloorResult floor;
-  ObstacleResult obstacles;
-  MapUpdateStats map;
-  WalkerResult walker;
-  Command motion = Command::Stop;    ///< what the body did (a step under way is finished first)
-  std::optional<Footstep> footstep;  ///< landed at the end of the frame
-  double footstep_clearance = 0.0;   ///< from the nearest true object (footstep only) [m]
-  std::vector<ObjectView> objects;   ///< each object of the scene
-  double measure_seconds = 0.0;      ///< rendering and extraction, or synthesis [s]
-  double process_seconds = 0.0;      ///< floor, obstacles, map and walker [s]
+  cv::Mat image;                         ///< the rendered image (render = true)
+  Command motion = Command::Stop;        ///< what the body did (a step under way is finished first)
+  std::optional<Footstep> footstep;      ///< landed at the end of the frame
+  double footstep_clearance = 0.0;       ///< from the nearest true object (footstep only) [m]
+  std::vector<ObjectView> objects;       ///< each object of the scene
+  double measure_seconds = 0.0;          ///< rendering and extraction, or synthesis [s]
+  double process_seconds = 0.0;          ///< floor, obstacles, map and walker (times.total()) [s]
 };
 
 /// The experiment, one frame per step().
@@ -118,24 +112,25 @@ class WalkSimulation {
 
   WalkFrame step();
   std::uint64_t frame() const { return frame_; }
-  const OccupancyMap& map() const { return map_; }
+  const OccupancyMap& map() const { return pipeline_.map(); }
+  const Pipeline& pipeline() const { return pipeline_; }
+  /// The reference the images are measured with; throws std::logic_error when RDMaps are
+  /// synthesized (render = false).
+  const Reference& reference() const;
   const Gait& gait() const { return gait_; }
   const WalkConfig& config() const { return config_; }
 
  private:
   struct Measurement;
+  std::uint64_t stamp() const;  ///< of the frame now [us]
   Measurement measure(const Scene& scene, const Eigen::Isometry3d& world_from_camera);
   void judge(const Scene& scene, const std::vector<SlitCrossing>& truth, WalkFrame& f) const;
 
   WalkConfig config_;
-  SensorGeometry geometry_;
+  Pipeline pipeline_;
   std::unique_ptr<Simulator> simulator_;
   std::unique_ptr<Extractor> extractor_;
   std::unique_ptr<RDMapSynthesizer> synthesizer_;
-  FloorDetector detector_;
-  ObstacleClusterer clusterer_;
-  OccupancyMap map_;
-  Walker walker_;
   Gait gait_;
   WalkWorld world_;
   std::uint64_t frame_ = 0;

@@ -1,4 +1,4 @@
-#include "multislit/simulator.h"
+#include "multislit/sim/simulator.h"
 
 #include <boost/math/special_functions/gamma.hpp>
 #include <opencv2/core.hpp>

@@ -3,8 +3,8 @@
 // floor texture and gloss, object surfaces). The ground truth never depends on any of it.
 #pragma once
 
-#include "multislit/scene.h"
-#include "multislit/simulator.h"
+#include "multislit/sim/scene.h"
+#include "multislit/sim/simulator.h"
 
 #include <cstdint>
 #include <string>

@@ -1,4 +1,4 @@
-#include "multislit/scenarios.h"
+#include "multislit/sim/scenarios.h"
 
 #include <stdexcept>
 

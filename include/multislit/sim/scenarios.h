@@ -1,8 +1,8 @@
 // Named simulated experiments: the poses of Table I and the scenes of the paper's figures.
 #pragma once
 
-#include "multislit/scene.h"
 #include "multislit/sensor.h"
+#include "multislit/sim/scene.h"
 
 #include <Eigen/Geometry>
 

@@ -1,6 +1,6 @@
 // CameraEmulator: Aravis's GigE Vision fake camera on 127.0.0.1, filled with our own images.
+#include "multislit/sim/camera_emulator.h"
 #include "aravis_util.h"
-#include "multislit/sources.h"
 
 #include <algorithm>
 #include <cstring>

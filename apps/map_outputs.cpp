@@ -1,0 +1,132 @@
+#include "map_outputs.h"
+
+#include "plot.h"
+#include "walk_figures.h"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace multislit::apps {
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+std::ofstream openCsv(const std::filesystem::path& path, const char* header) {
+  std::ofstream csv(path);
+  if (!csv) throw std::runtime_error("cannot write " + path.string());
+  csv << header << '\n';
+  return csv;
+}
+
+void checkWritten(std::ofstream& csv, const std::filesystem::path& path) {
+  csv.flush();
+  if (!csv) throw std::runtime_error("could not write all of " + path.string());
+  csv.close();
+}
+
+}  // namespace
+
+MapRecorder::MapRecorder(const std::filesystem::path& out) : out_(out) {
+  std::filesystem::create_directories(out);
+  frames_csv_ = openCsv(out / "decisions.csv",
+                        "seq,stamp_us,x_m,y_m,yaw_deg,decision,reason,floor_found,valid_points,"
+                        "sigma_px,obstacle_points,groups,nearest_m,map_occupied,floor_ms,"
+                        "obstacles_ms,map_ms,walker_ms");
+  groups_csv_ = openCsv(out / "obstacles.csv",
+                        "seq,stamp_us,group,points,slits,x_m,y_m,z_m,world_x_m,world_y_m,"
+                        "length_m,width_m,height_m,distance_m");
+}
+
+void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us,
+                         const pcl::PointCloud<PointRDM>& cloud, const PipelineResult& r,
+                         const OccupancyMap& map) {
+  const auto seq_ll = static_cast<unsigned long long>(seq);
+  const auto stamp_ll = static_cast<unsigned long long>(stamp_us);
+  const std::vector<Obstacle>& groups = r.obstacles.obstacles;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "%llu,%llu,%.4f,%.4f,%.2f,%s,%s,%d,%zu,%.4f,%zu,%zu,%.4f,%zu,%.4f,%.4f,%.4f,%.4f\n",
+                seq_ll, stamp_ll, r.body.x, r.body.y, r.body.yaw / kDeg,
+                commandName(r.walker.command), reasonName(r.walker.reason), r.floor.found ? 1 : 0,
+                r.floor.valid_points, r.floor.sigma, r.obstacles.pointCount(), groups.size(),
+                groups.empty() ? NAN : groups[0].distance, map.occupiedCount(), 1e3 * r.times.floor,
+                1e3 * r.times.obstacles, 1e3 * r.times.map, 1e3 * r.times.walker);
+  frames_csv_ << line;
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    const Obstacle& o = groups[g];
+    const Eigen::Vector2d world = r.body.toWorld(o.centroid.head<2>());
+    std::snprintf(line, sizeof line,
+                  "%llu,%llu,%zu,%zu,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", seq_ll,
+                  stamp_ll, g, o.pointCount(), o.slits, o.centroid.x(), o.centroid.y(),
+                  o.centroid.z(), world.x(), world.y(), o.length, o.width, o.height, o.distance);
+    groups_csv_ << line;
+  }
+  ++frames_;
+  groups_ += groups.size();
+  no_floor_ += !r.floor.found;
+  ++decisions_[static_cast<int>(r.walker.command)];
+  sum_.floor += r.times.floor, sum_.obstacles += r.times.obstacles;
+  sum_.map += r.times.map, sum_.walker += r.times.walker;
+  path_.push_back(r.body);
+  obstacle_points_.push_back(static_cast<double>(r.obstacles.pointCount()));
+  if (frames_ == 1 || r.walker.command != last_) {
+    events_.push_back("frame " + std::to_string(seq) + ": " + commandName(r.walker.command) + " (" +
+                      reasonName(r.walker.reason) + ")");
+    last_ = r.walker.command;
+  }
+  if (r.obstacles.pointCount() > best_points_ || frames_ == 1) {
+    best_points_ = r.obstacles.pointCount();
+    best_seq_ = seq;
+    best_cloud_ = cloud;
+    best_floor_ = r.floor;
+  }
+}
+
+std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& heading,
+                                double seconds, bool interrupted) {
+  checkWritten(frames_csv_, out_ / "decisions.csv");
+  checkWritten(groups_csv_, out_ / "obstacles.csv");
+  const OccupancyMap& map = pipeline.map();
+  map.save((out_ / "map.bt").string());
+  TopViewContent top;
+  top.path = path_;
+  drawTopView((out_ / "map_top.png").string(), map, top);
+  drawLinePlot((out_ / "fig15_obstacle_points.png").string(),
+               "Fig. 15: points detected as obstacles in each frame", "frame", "points",
+               {Series{"obstacle points", obstacle_points_, 0xd03030}});
+  if (!best_cloud_.empty()) {
+    char title[160];
+    std::snprintf(title, sizeof title, "Fig. 14: RDMap of frame %llu, the floor and obstacles",
+                  static_cast<unsigned long long>(best_seq_));
+    drawRDMapFigure((out_ / "rdmap_most_obstacles.png").string(), title, best_cloud_, best_floor_);
+  }
+  const double n = static_cast<double>(std::max<std::size_t>(frames_, 1));
+  std::ostringstream o;
+  char s[640];
+  std::snprintf(s, sizeof s,
+                "%s\n"
+                "  frames: %zu processed%s, %zu skipped without a pose, %zu without a floor\n"
+                "  decisions: walk %zu, turn %zu, stop %zu; obstacle groups: %zu\n"
+                "  map: %zu occupied voxels of %.0f mm, %zu voxels, %.0f kB\n"
+                "  per frame (CPU): floor %.3f ms, obstacles %.3f ms, map %.3f ms, footsteps and "
+                "decision %.3f ms; %.1f s in all\n",
+                heading.c_str(), frames_, interrupted ? " (interrupted)" : "", skipped_, no_floor_,
+                decisions_[0], decisions_[1], decisions_[2], groups_, map.occupiedCount(),
+                1e3 * pipeline.config().map.resolution, map.leafCount(), map.memoryUsage() / 1e3,
+                1e3 * sum_.floor / n, 1e3 * sum_.obstacles / n, 1e3 * sum_.map / n,
+                1e3 * sum_.walker / n, seconds);
+  o << s << "what the robot was told:\n";
+  for (const std::string& e : events_) o << "  " << e << "\n";
+  o << "outputs in " << out_.string()
+    << ": decisions.csv, obstacles.csv, map.bt, map_top.png, fig15_obstacle_points.png, "
+       "rdmap_most_obstacles.png, summary.txt\n";
+  std::ofstream summary(out_ / "summary.txt");
+  summary << o.str();
+  checkWritten(summary, out_ / "summary.txt");
+  return o.str();
+}
+
+}  // namespace multislit::apps

@@ -1,0 +1,50 @@
+// What `multislit map` writes while a real or recorded walk goes on: one row per frame
+// (decisions.csv), one row per obstacle group (obstacles.csv), and at the end the OctoMap
+// (map.bt), its top view, Fig. 14 and 15 and a summary. Every row is whole when the run stops.
+#pragma once
+
+#include "multislit/pipeline.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace multislit::apps {
+
+class MapRecorder {
+ public:
+  /// Opens the CSV files in `out` (created); throws std::runtime_error naming a file it cannot
+  /// write.
+  explicit MapRecorder(const std::filesystem::path& out);
+
+  /// One processed frame: `seq` and `stamp_us` of the source, the cloud given to the pipeline,
+  /// what it gave and its map after the frame.
+  void record(std::uint64_t seq, std::uint64_t stamp_us, const pcl::PointCloud<PointRDM>& cloud,
+              const PipelineResult& result, const OccupancyMap& map);
+  /// A frame that got no pose (skipped, not processed).
+  void skip() { ++skipped_; }
+
+  /// map.bt, map_top.png, fig15_obstacle_points.png, rdmap_most_obstacles.png, summary.txt; the
+  /// CSV files closed. Returns the summary (also written). `heading`: what ran, on what.
+  std::string finish(const Pipeline& pipeline, const std::string& heading, double seconds,
+                     bool interrupted);
+
+ private:
+  std::filesystem::path out_;
+  std::ofstream frames_csv_, groups_csv_;
+  std::vector<Pose2D> path_;
+  std::vector<double> obstacle_points_;
+  std::vector<std::string> events_;
+  Command last_ = Command::Stop;
+  std::size_t frames_ = 0, skipped_ = 0, no_floor_ = 0, groups_ = 0;
+  std::size_t decisions_[3] = {0, 0, 0};  ///< walk, turn, stop
+  PipelineTimes sum_;
+  std::uint64_t best_seq_ = 0;  ///< the frame with most obstacle points (Fig. 14)
+  std::size_t best_points_ = 0;
+  pcl::PointCloud<PointRDM> best_cloud_;
+  FloorResult best_floor_;
+};
+
+}  // namespace multislit::apps

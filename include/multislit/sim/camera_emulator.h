@@ -1,0 +1,46 @@
+// A GigE Vision camera on 127.0.0.1 that serves our own images (Aravis's fake camera): what the
+// tests, the demos and `multislit emulate` open exactly as they would open the real sensor.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace multislit {
+
+/// Aravis's GigE Vision fake camera on 127.0.0.1 (GVCP port 3956) serving images in turn: the
+/// frame with camera frame id k carries image imageIndex(k). For tests, demos and
+/// `multislit emulate`; it answers on the loopback interface only.
+struct EmulatorConfig {
+  std::string serial = "MULTISLIT";  ///< device serial number (at most 15 characters)
+  double fps = 30.0;                 ///< frame rate until a client sets its own [Hz]
+  double lost_packet_ratio = 0.0;    ///< fraction of stream packets not sent [-]
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+class CameraEmulator {
+ public:
+  static constexpr const char* kAddress = "127.0.0.1";
+
+  /// `images`: one or more images of the same size and type (CV_8UC1 or CV_16UC1). Throws
+  /// std::invalid_argument for bad images, std::runtime_error when 127.0.0.1:3956 is taken.
+  explicit CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig& config = {});
+  ~CameraEmulator();
+  CameraEmulator(const CameraEmulator&) = delete;
+  CameraEmulator& operator=(const CameraEmulator&) = delete;
+
+  std::size_t imageIndex(std::uint64_t frame_id) const;
+  std::uint64_t framesServed() const;
+  /// 1 makes a camera that answers control requests but sends no image.
+  void setLostPacketRatio(double ratio);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace multislit

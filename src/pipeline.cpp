@@ -1,0 +1,76 @@
+#include "multislit/pipeline.h"
+
+#include <ctime>
+
+namespace multislit {
+
+namespace {
+
+/// CPU time of the calling thread [s]: the stages run on it, and other processes' use of the core
+/// does not count.
+double threadSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// Seconds since `t0`, and `t0` moved to now.
+double lap(double& t0) {
+  const double now = threadSeconds();
+  const double s = now - t0;
+  t0 = now;
+  return s;
+}
+
+const PipelineConfig& validated(const PipelineConfig& config) {
+  config.validate();
+  return config;
+}
+
+}  // namespace
+
+void PipelineConfig::validate() const {
+  sensor.validate();
+  floor.validate();
+  obstacles.validate();
+  map.validate();
+  foot.validate();
+  walker.validate();
+}
+
+Pipeline::Pipeline(const PipelineConfig& config)
+    : config_(validated(config)),
+      geometry_(config.sensor),
+      detector_(config.floor),
+      clusterer_(config.obstacles, config.foot),
+      map_(config.map),
+      walker_(config.walker, config.foot) {}
+
+PipelineResult Pipeline::process(const PipelineInput& in) {
+  PipelineResult r;
+  double t0 = threadSeconds();
+  const Eigen::Isometry3d robot_from_camera =
+      in.robot_from_camera ? *in.robot_from_camera : geometry_.robotFromCamera();
+  r.body = Pose2D::onFloor(in.world_from_robot);
+  r.world_from_camera = in.world_from_robot * robot_from_camera;
+  // Sec. III-B: the floor by RANSAC (eq. 1-3); points farther than 3 sigma are obstacle points.
+  r.floor = detector_.detect(in.cloud);
+  r.times.floor = lap(t0);
+  // The obstacle points grouped into obstacles, sized and placed in the robot frame.
+  if (in.cloud) r.obstacles = clusterer_.cluster(in.cloud, r.floor, robot_from_camera);
+  r.times.obstacles = lap(t0);
+  // Sec. V: an obstacle seen first very near the feet (judged before the map learns it).
+  const WalkerObservation seen{r.floor.found, walker_.findSudden(r.obstacles, map_, r.body)};
+  r.times.walker = lap(t0);
+  // The map accumulates the frames along the odometry.
+  if (in.cloud)
+    r.map = map_.insertFrame(*in.cloud, r.floor, r.obstacles, r.world_from_camera,
+                             geometry_.projectorCentre());
+  r.times.map = lap(t0);
+  // The footsteps ahead against the map: walk, turn or stop.
+  r.walker = walker_.step(map_, r.body, in.next_foot, seen);
+  r.times.walker += lap(t0);
+  return r;
+}
+
+}  // namespace multislit
