@@ -89,8 +89,9 @@ configure_and_build() {
 run_demo() {
   install_packages
   section "building"
-  # The demo needs the command only; `bash run.sh test` builds everything.
-  configure_and_build build --target multislit_cli -- -DCMAKE_BUILD_TYPE=Release
+  # The demo needs the command; with the filters everything `cmake --install build` installs is
+  # built too. `bash run.sh test` builds everything.
+  configure_and_build build --target multislit_cli multislit_filters -- -DCMAKE_BUILD_TYPE=Release
   section "demo"
   "${DEMO[@]}"
   section_end
@@ -108,12 +109,12 @@ run_tests() {
   local failed=()
   install_packages
   section "building"
-  configure_and_build build -- -DCMAKE_BUILD_TYPE=Release
+  configure_and_build build -- -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON
   section "testing (release)"
   ctest --test-dir build --output-on-failure -j2 || failed+=("release")
   section "building (ASan+UBSan)"
   # -O1 -g1 (line tables: reports keep file and line) compiles in 0.6x the time of -O2 -g.
-  configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=ON \
     "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DMULTISLIT_BUILD_BENCHMARKS=OFF
   section "testing (ASan+UBSan)"
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

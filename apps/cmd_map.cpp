@@ -199,6 +199,7 @@ int runMap(int argc, char** argv) {
   auto previous_term = std::signal(SIGTERM, onStopSignal);
   const auto t0 = std::chrono::steady_clock::now();
   std::size_t processed = 0, misses = 0, bad_frames = 0;
+  StampSource clock = StampSource::Host;
   in.source->start();
   while (!g_stop && (max_frames == 0 || static_cast<long>(processed) < max_frames)) {
     const std::optional<Frame> frame = in.source->next(std::chrono::milliseconds(200));
@@ -220,6 +221,7 @@ int runMap(int argc, char** argv) {
       if (bad_frames++ == 0) std::cerr << "frame " << frame->seq << ": " << e.what() << "\n";
       continue;
     }
+    clock = frame->stamp_source;
     const PipelineResult r = pipeline.process(*input);
     poses.follow(r.walker);
     recorder.record(frame->seq, frame->stamp_us, *input->cloud, r, pipeline.map());
@@ -233,7 +235,8 @@ int runMap(int argc, char** argv) {
   if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string heading = "multislit map: " + in.description + ", poses from " +
+  const std::string heading = "multislit map: " + in.description +
+                              " (stamps: " + stampSourceName(clock) + " clock), poses from " +
                               poses.description() +
                               (bad_frames ? ", " + std::to_string(bad_frames) + " bad frames" : "");
   std::cout << recorder.finish(pipeline, heading, seconds, g_stop);

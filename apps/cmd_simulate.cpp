@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "common.h"
 
+#include "multislit/odometry.h"
 #include "multislit/sim/photometry.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
@@ -131,6 +132,7 @@ int runSimulate(int argc, char** argv) {
                           .count();
   cli::Progress progress(static_cast<std::size_t>(frames), "simulate");
   std::size_t crossings = 0;
+  std::vector<OdometrySample> odometry;  // the robot at each frame's stamp (multislit map)
   for (long k = 0; k < frames; ++k) {
     const auto frame = static_cast<uint64_t>(k);
     const Eigen::Isometry3d world_from_camera =
@@ -142,13 +144,16 @@ int runSimulate(int argc, char** argv) {
     writeGroundTruthCsv((out / (std::string(name) + ".csv")).string(), f.truth, scenario.scene);
     crossings += f.truth.size();
     const Eigen::Vector3d c = world_from_camera.translation();
-    index << k << ',' << name << ".png," << stamp0 + static_cast<long long>(k * 1e6 / fps) << ','
+    const auto stamp = static_cast<std::uint64_t>(stamp0 + static_cast<long long>(k * 1e6 / fps));
+    odometry.push_back({stamp, scenario.worldFromRobot(frame)});
+    index << k << ',' << name << ".png," << stamp << ','
           << scenario.worldFromRobot(frame).translation().x() << ',' << c.x() << ',' << c.y() << ','
           << c.z() << ',' << scenario.mount.tilt << ',' << scenario.mount.roll << ','
           << scenario.mount.height << '\n';
     progress.update(static_cast<std::size_t>(k + 1));
   }
   progress.finish();
+  if (!odometry.empty()) saveOdometry((out / "odometry.csv").string(), odometry);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const long images = frames + (args.has("no-reference") ? 0 : 1);
@@ -163,7 +168,8 @@ int runSimulate(int argc, char** argv) {
               << " slit crossings per frame";
   std::cout << "\n  reference: " << (out / "reference.png").string() << " (+ .csv ground truth)\n"
             << "  sequence:  " << (out / "frame_*.png").string() << ", index in "
-            << (out / "frames.csv").string() << "\n";
+            << (out / "frames.csv").string() << ", poses in " << (out / "odometry.csv").string()
+            << "\n";
   return 0;
 }
 

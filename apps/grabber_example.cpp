@@ -5,6 +5,7 @@
 //   multislit emulate &   multislit_grabber_example --camera 127.0.0.1 --calibration calib.yaml
 //   multislit_grabber_example --sequence out/simulate --calibration calib.yaml --save clouds
 #include <multislit/grabber.h>
+#include <multislit/pipeline.h>
 #include <multislit/sim/simulated_source.h>
 #include <multislit/sources.h>
 
@@ -63,6 +64,7 @@ int main(int argc, char** argv) {
     // 1. A frame source and the reference that goes with it.
     std::shared_ptr<multislit::FrameSource> source;
     multislit::Reference reference;
+    multislit::PipelineConfig pipeline_config;  // the paper's sensor on its nominal mount
     if (!calibration.empty()) reference = multislit::Reference::load(calibration);
     if (!camera.empty()) {
       multislit::AravisConfig config;
@@ -83,18 +85,26 @@ int main(int argc, char** argv) {
       config.fps = fps;
       auto simulator = std::make_shared<multislit::SimulatorSource>(config);
       if (calibration.empty()) reference = simulator->makeReference();
+      pipeline_config.sensor.mount = simulator->scenario().mount;
       source = simulator;
     }
 
-    // 2. The grabber and a callback, as with any pcl::Grabber.
+    // 2. The grabber and a callback, as with any pcl::Grabber. The callback runs the whole chain
+    //    (floor, obstacle groups, map, footsteps, decision) on each cloud, the robot standing
+    //    still at the origin; a robot would give its odometry as input.world_from_robot.
     multislit::MultiSlitGrabber grabber(source, reference);
+    multislit::Pipeline pipeline(pipeline_config);
     std::atomic<int> clouds{0};
-    std::atomic<std::size_t> points{0};
+    std::atomic<std::size_t> points{0}, groups{0};
+    std::atomic<multislit::Command> decision{multislit::Command::Stop};
     std::function<void(const pcl::PointCloud<multislit::PointRDM>::ConstPtr&)> on_cloud =
         [&](const pcl::PointCloud<multislit::PointRDM>::ConstPtr& cloud) {
-          std::size_t valid = 0;
-          for (const multislit::PointRDM& p : cloud->points) valid += std::isfinite(p.dk);
-          points = valid;
+          multislit::PipelineInput input;
+          input.cloud = cloud;
+          const multislit::PipelineResult r = pipeline.process(input);
+          points = r.floor.valid_points;
+          groups = r.obstacles.obstacles.size();
+          decision = r.walker.command;
           if (!save_dir.empty()) {
             char name[64];
             std::snprintf(name, sizeof name, "cloud_%010u.pcd", cloud->header.seq);
@@ -116,8 +126,11 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       if (std::chrono::steady_clock::now() - report >= std::chrono::seconds(1)) {
         report = std::chrono::steady_clock::now();
-        std::printf("%d clouds, %.1f fps, %zu of %zu points in the last cloud\n", clouds.load(),
-                    grabber.getFramesPerSecond(), points.load(), reference.pointCount());
+        std::printf(
+            "%d clouds, %.1f fps, %zu of %zu points in the last cloud, %zu obstacle "
+            "group(s), decision: %s\n",
+            clouds.load(), grabber.getFramesPerSecond(), points.load(), reference.pointCount(),
+            groups.load(), multislit::commandName(decision));
       }
     }
     const auto stopping = std::chrono::steady_clock::now();

@@ -79,8 +79,27 @@ void onControlLost(ArvDevice*, gpointer flag) {
   static_cast<std::atomic<bool>*>(flag)->store(true);
 }
 
+// Whether the camera's clock is synchronized by PTP (IEEE 1588): SFNC's PtpEnable or the older
+// GevIEEE1588 on, and its status (PtpStatus, GevIEEE1588Status) Master or Slave where it has one.
+bool ptpSynchronized(ArvDevice* device) {
+  const std::pair<const char*, const char*> features[] = {{"PtpEnable", "PtpStatus"},
+                                                          {"GevIEEE1588", "GevIEEE1588Status"}};
+  for (const auto& [enable, status] : features) {
+    if (arv_device_get_feature(device, enable) == nullptr) continue;
+    Error error;
+    const bool on = arv_device_get_boolean_feature_value(device, enable, error.out());
+    if (error || !on) continue;
+    if (arv_device_get_feature(device, status) == nullptr) return true;
+    const char* state = arv_device_get_string_feature_value(device, status, error.out());
+    const std::string s = error || state == nullptr ? "" : state;
+    if (s == "Master" || s == "Slave") return true;
+  }
+  return false;
+}
+
 // A complete Mono8 / Mono16 image buffer as a Frame (its pixels copied); nullopt otherwise.
-std::optional<Frame> copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival) {
+std::optional<Frame> copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival,
+                               bool camera_clock) {
   if (arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS ||
       arv_buffer_get_payload_type(buffer) != ARV_BUFFER_PAYLOAD_TYPE_IMAGE)
     return std::nullopt;
@@ -94,14 +113,62 @@ std::optional<Frame> copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::tim
   const std::size_t needed = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                              (type == CV_8UC1 ? 1 : 2);
   if (data == nullptr || width <= 0 || height <= 0 || size < needed) return std::nullopt;
-  // The host's clock at the buffer's arrival (the camera's own clock has no epoch).
-  std::uint64_t stamp_ns = arv_buffer_get_system_timestamp(buffer);
-  if (stamp_ns == 0)
-    stamp_ns = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                              std::chrono::system_clock::now().time_since_epoch())
-                                              .count());
-  return Frame{cv::Mat(height, width, type, const_cast<void*>(data)).clone(), stamp_ns / 1000,
-               arv_buffer_get_frame_id(buffer), arrival};
+  // The camera's clock when PTP gives it the epoch, else the host's at the buffer's arrival.
+  std::uint64_t host_ns = arv_buffer_get_system_timestamp(buffer);
+  if (host_ns == 0)
+    host_ns = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                             std::chrono::system_clock::now().time_since_epoch())
+                                             .count());
+  Frame frame;
+  frame.image = cv::Mat(height, width, type, const_cast<void*>(data)).clone();
+  frame.camera_stamp_ns = arv_buffer_get_timestamp(buffer);
+  const FrameStamp stamp = chooseFrameStamp(camera_clock, frame.camera_stamp_ns, host_ns);
+  frame.stamp_us = stamp.stamp_us;
+  frame.stamp_source = stamp.source;
+  frame.seq = arv_buffer_get_frame_id(buffer);
+  frame.arrival = arrival;
+  return frame;
+}
+
+// Acquisition mode, pixel format, region, exposure, gain, rate or trigger and packet size, as the
+// config asks; throws std::runtime_error naming the feature the camera refused.
+void configureCamera(ArvCamera* c, const AravisConfig& config) {
+  Error error;
+  arv_camera_stop_acquisition(c, error.out());  // settings may be locked while acquiring
+  arv_camera_set_acquisition_mode(c, ARV_ACQUISITION_MODE_CONTINUOUS, error.out());
+  error.check("AcquisitionMode");
+  arv_camera_set_pixel_format(c,
+                              config.pixel_format == PixelFormat::Mono8 ? ARV_PIXEL_FORMAT_MONO_8
+                                                                        : ARV_PIXEL_FORMAT_MONO_16,
+                              error.out());
+  error.check("PixelFormat");
+  if (config.roi_width > 0 && config.roi_height > 0) {
+    arv_camera_set_region(c, config.roi_x, config.roi_y, config.roi_width, config.roi_height,
+                          error.out());
+    error.check("region of interest");
+  }
+  if (config.exposure_us > 0) {
+    arv_camera_set_exposure_time(c, config.exposure_us, error.out());
+    error.check("ExposureTime");
+  }
+  if (config.gain_db >= 0) {
+    arv_camera_set_gain(c, config.gain_db, error.out());
+    error.check("Gain");
+  }
+  if (config.trigger == TriggerMode::FreeRunning) {
+    if (config.frame_rate > 0) {
+      arv_camera_set_frame_rate(c, config.frame_rate, error.out());
+      error.check("AcquisitionFrameRate");
+    }
+    arv_camera_clear_triggers(c, error.out());  // not every camera has triggers
+  } else {
+    arv_camera_set_trigger(c, "Software", error.out());
+    error.check("software trigger");
+  }
+  if (arv_camera_is_gv_device(c) && config.packet_size > 0) {
+    arv_camera_gv_set_packet_size(c, config.packet_size, error.out());
+    error.check("GevSCPSPacketSize");
+  }
 }
 
 }  // namespace
@@ -167,41 +234,7 @@ void AravisSource::open() {
   cam->lost_handler =
       g_signal_connect(device.get(), "control-lost", G_CALLBACK(onControlLost), &cam->control_lost);
 
-  arv_camera_stop_acquisition(c, error.out());  // settings may be locked while acquiring
-  arv_camera_set_acquisition_mode(c, ARV_ACQUISITION_MODE_CONTINUOUS, error.out());
-  error.check("AcquisitionMode");
-  arv_camera_set_pixel_format(c,
-                              config_.pixel_format == PixelFormat::Mono8 ? ARV_PIXEL_FORMAT_MONO_8
-                                                                         : ARV_PIXEL_FORMAT_MONO_16,
-                              error.out());
-  error.check("PixelFormat");
-  if (config_.roi_width > 0 && config_.roi_height > 0) {
-    arv_camera_set_region(c, config_.roi_x, config_.roi_y, config_.roi_width, config_.roi_height,
-                          error.out());
-    error.check("region of interest");
-  }
-  if (config_.exposure_us > 0) {
-    arv_camera_set_exposure_time(c, config_.exposure_us, error.out());
-    error.check("ExposureTime");
-  }
-  if (config_.gain_db >= 0) {
-    arv_camera_set_gain(c, config_.gain_db, error.out());
-    error.check("Gain");
-  }
-  if (config_.trigger == TriggerMode::FreeRunning) {
-    if (config_.frame_rate > 0) {
-      arv_camera_set_frame_rate(c, config_.frame_rate, error.out());
-      error.check("AcquisitionFrameRate");
-    }
-    arv_camera_clear_triggers(c, error.out());  // not every camera has triggers
-  } else {
-    arv_camera_set_trigger(c, "Software", error.out());
-    error.check("software trigger");
-  }
-  if (arv_camera_is_gv_device(c) && config_.packet_size > 0) {
-    arv_camera_gv_set_packet_size(c, config_.packet_size, error.out());
-    error.check("GevSCPSPacketSize");
-  }
+  configureCamera(c, config_);
 
   cam->stream.reset(arv_camera_create_stream(c, nullptr, nullptr, error.out()));
   error.check("cannot open the stream of camera " + config_.camera);
@@ -215,6 +248,8 @@ void AravisSource::open() {
   arv_camera_start_acquisition(c, error.out());
   error.check("AcquisitionStart");
 
+  stamp_source_ = config_.camera_clock && ptpSynchronized(device.get()) ? StampSource::Camera
+                                                                        : StampSource::Host;
   camera_ = std::move(cam);
   last_frame_ = Clock::now();
   trigger_outstanding_ = false;
@@ -292,7 +327,7 @@ std::optional<Frame> AravisSource::take(Clock::time_point deadline) {
       }
       continue;
     }
-    std::optional<Frame> frame = copyFrame(buffer, now);
+    std::optional<Frame> frame = copyFrame(buffer, now, stamp_source_ == StampSource::Camera);
     arv_stream_push_buffer(stream, buffer);
     if (!frame) {
       ++bad_buffers_;  // missing packets, timeout, wrong size or format

@@ -3,6 +3,16 @@
 
 namespace multislit {
 
+const char* stampSourceName(StampSource source) {
+  return source == StampSource::Camera ? "camera (PTP)" : "host";
+}
+
+FrameStamp chooseFrameStamp(bool camera_clock_synchronized, std::uint64_t camera_ns,
+                            std::uint64_t host_ns) {
+  if (camera_clock_synchronized && camera_ns > 0) return {camera_ns / 1000, StampSource::Camera};
+  return {host_ns / 1000, StampSource::Host};
+}
+
 void FrameSource::interrupt() {
   {
     std::lock_guard<std::mutex> lock(wait_mutex_);

@@ -56,7 +56,25 @@ kill $emulator 2>/dev/null
 wait $emulator 2>/dev/null
 trap - EXIT
 
-# 3. Errors.
+# 3. Ctrl-C: the run ends at a frame boundary, every file complete, rc 130.
+"$multislit" map --simulate floor --out "$work/interrupted" >"$work/interrupted.log" 2>&1 &
+mapper=$!
+for _ in $(seq 1 600); do
+  [[ -f $work/interrupted/decisions.csv && $(wc -l <"$work/interrupted/decisions.csv") -ge 4 ]] && break
+  sleep 0.1
+done
+kill -INT $mapper
+wait $mapper
+rc=$?
+[[ $rc == 130 ]] || fail "map after Ctrl-C: rc $rc, not 130: $(tail -3 "$work/interrupted.log")"
+grep -q "(interrupted)" "$work/interrupted/summary.txt" || fail "no summary after Ctrl-C"
+[[ -s $work/interrupted/map.bt && -s $work/interrupted/map_top.png ]] || fail "no map after Ctrl-C"
+[[ $(tail -c 1 "$work/interrupted/decisions.csv" | od -An -c | tr -d ' ') == '\n' ]] ||
+  fail "decisions.csv cut mid-row"
+awk -F, 'NF != 18 { exit 1 }' "$work/interrupted/decisions.csv" || fail "a short row"
+echo "Ctrl-C: rc 130 after $(($(wc -l <"$work/interrupted/decisions.csv") - 1)) whole rows"
+
+# 4. Errors.
 bad="$work/bad_odometry.csv"
 printf 'stamp_us,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n0,0,0,0,0,0,0\n' >"$bad"
 if "$multislit" map --sequence "$work/rec" --calibration "$work/rec/calibration.yaml" \

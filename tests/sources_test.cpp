@@ -296,10 +296,27 @@ void expectServedImages(int type) {
     EXPECT_TRUE(identical(frame->image, images[emulator->imageIndex(frame->seq)]))
         << "frame id " << frame->seq;
     EXPECT_NEAR(static_cast<double>(frame->stamp_us), static_cast<double>(nowMicros()), 5e6);
+    // Aravis's fake camera has no PTP: the host's arrival time, the camera's own stamp kept.
+    EXPECT_EQ(frame->stamp_source, StampSource::Host);
+    EXPECT_GT(frame->camera_stamp_ns, 0u);
   }
+  EXPECT_EQ(source.stampSource(), StampSource::Host);
   source.stop();
   EXPECT_EQ(got, 12);
   EXPECT_EQ(source.stats().frames, 12u);
+}
+
+// A frame's stamp: the camera's clock only when PTP gives it the epoch, the host's otherwise.
+TEST(FrameStamp, CameraClockWhenPtpSynchronizedHostOtherwise) {
+  const std::uint64_t camera_ns = 1800000000123456789ull, host_ns = 1800000000200000000ull;
+  const FrameStamp ptp = chooseFrameStamp(true, camera_ns, host_ns);
+  EXPECT_EQ(ptp.source, StampSource::Camera);
+  EXPECT_EQ(ptp.stamp_us, 1800000000123456u);
+  const FrameStamp free_running = chooseFrameStamp(false, 5000000000ull, host_ns);
+  EXPECT_EQ(free_running.source, StampSource::Host);  // 5 s since the camera's power-up
+  EXPECT_EQ(free_running.stamp_us, 1800000000200000u);
+  EXPECT_EQ(chooseFrameStamp(true, 0, host_ns).source, StampSource::Host);  // no camera stamp
+  EXPECT_STREQ(stampSourceName(StampSource::Camera), "camera (PTP)");
 }
 
 TEST(AravisSource, DeliversTheServedImagesMono8) { expectServedImages(CV_8UC1); }

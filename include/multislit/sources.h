@@ -98,14 +98,19 @@ struct AravisConfig {
   int lost_after_ms = 2000;           ///< no frame for this long while one is due: camera lost [ms]
   int reconnect_delay_ms = 100;       ///< first wait before reopening a lost camera [ms]
   int reconnect_max_delay_ms = 2000;  ///< the wait doubles after each failure up to this [ms]
+  /// Stamp frames with the camera's own clock when PTP synchronizes it (PtpEnable or
+  /// GevIEEE1588 on, status Master or Slave); false, or no PTP: the host's arrival time.
+  bool camera_clock = true;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
 /// A GigE Vision or USB3 Vision camera through Aravis. A camera that disappears is reopened with
 /// back-off (stats().reconnects); buffers with an error status are counted and skipped. Frame
-/// seq is the camera's frame id (16-bit ids of GigE Vision 1.x unwrapped), stamp_us the host's
-/// clock when the buffer arrived.
+/// seq is the camera's frame id (16-bit ids of GigE Vision 1.x unwrapped); stamp_us the camera's
+/// PTP-synchronized clock at exposure when it has one (AravisConfig::camera_clock), else the
+/// host's clock when the buffer arrived; Frame::stamp_source says which, camera_stamp_ns keeps
+/// the camera's own timestamp either way.
 class AravisSource : public FrameSource {
  public:
   explicit AravisSource(const AravisConfig& config = {});
@@ -118,6 +123,8 @@ class AravisSource : public FrameSource {
   SourceStats stats() const override;
   bool live() const override { return config_.trigger == TriggerMode::FreeRunning; }
   const AravisConfig& config() const { return config_; }
+  /// The clock of the frames' stamps: Camera when the opened camera's clock is PTP-synchronized.
+  StampSource stampSource() const { return stamp_source_; }
 
  private:
   struct Camera;  // the opened Aravis objects
@@ -132,6 +139,7 @@ class AravisSource : public FrameSource {
   int reconnect_delay_ms_ = 0;
   bool trigger_outstanding_ = false;
   std::uint64_t last_id_ = 0, id_wraps_ = 0;  // 16-bit GigE Vision frame ids made monotonic
+  std::atomic<StampSource> stamp_source_{StampSource::Host};
   std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0};
 };
 
