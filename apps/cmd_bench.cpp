@@ -85,8 +85,7 @@ BenchInput simulated(const std::string& scenario, long frames, double step, int 
   ReferenceConfig rc;
   rc.expected_slits = sensor.projector.slit_count;
   const Scene floor = makeScenario("reference").scene;
-  in.reference = Reference::fromImage(
-      sim.render(floor, sim.geometry().robotFromCamera(s.reference_mount), 1u << 30).image, rc);
+  in.reference = Reference::fromImage(sim.renderReference(floor, s.reference_mount).image, rc);
   in.reference.setNominalScale(sensor, s.reference_mount);
   in.robot_from_camera = sim.geometry().robotFromCamera(s.mount);
   in.light_origin = sim.geometry().projectorCentre();
@@ -239,10 +238,6 @@ struct Detection {
   std::vector<int> obstacle_points;  ///< cloud indices off the floor (points with x, y, z), sorted
   std::size_t clusters = 0;          ///< obstacle groups of at least 3 points
 };
-
-bool hasXYZ(const PointRDM& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
 
 /// Stage times of a path over every pass, and what it detected in the first pass.
 struct PathRun {

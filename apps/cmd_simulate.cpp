@@ -119,8 +119,7 @@ int runSimulate(int argc, char** argv) {
   if (!args.has("no-reference")) {
     // The reference: the bare floor, seen from the reference pose (Sec. II-C, Fig. 8).
     const Scene floor_only{scenario.scene.floor, {}};
-    const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(scenario.reference_mount);
-    const RenderedFrame ref = sim.render(floor_only, pose, /*frame=*/1u << 30);
+    const RenderedFrame ref = sim.renderReference(floor_only, scenario.reference_mount);
     writeImage((out / "reference.png").string(), ref.image);
     writeGroundTruthCsv((out / "reference.csv").string(), ref.truth, floor_only);
   }

@@ -40,10 +40,8 @@ int runTable1(int argc, char** argv) {
 
   // The reference: the bare floor at the reference pose (Sec. II-C).
   const Scenario ref_scene = makeScenario("reference");
-  Reference ref = Reference::fromImage(
-      sim.render(ref_scene.scene, sim.geometry().robotFromCamera(ref_scene.reference_mount),
-                 1u << 30)
-          .image);
+  Reference ref =
+      Reference::fromImage(sim.renderReference(ref_scene.scene, ref_scene.reference_mount).image);
   ref.setNominalScale(sensor, ref_scene.reference_mount);
   const Extractor extractor(ref);
 

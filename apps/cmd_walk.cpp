@@ -4,6 +4,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "multislit/units.h"
 #include "plot.h"
 #include "recording.h"
 #include "walk_figures.h"
@@ -22,8 +23,6 @@
 
 namespace multislit::apps {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 void declareOptions(cli::ArgParser& args) {
   args.option("out", "out/walk", "output folder");

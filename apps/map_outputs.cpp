@@ -1,4 +1,5 @@
 #include "map_outputs.h"
+#include "multislit/units.h"
 
 #include "plot.h"
 #include "walk_figures.h"
@@ -11,8 +12,6 @@
 namespace multislit::apps {
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 std::ofstream openCsv(const std::filesystem::path& path, const char* header) {
   std::ofstream csv(path);

@@ -106,7 +106,7 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   }
   for (; k < n; ++k) {
     const PointRDM& p = points[valid[k]];
-    place(valid[k], p.dk - (a * p.u + b * p.v + c));
+    place(valid[k], planeResidual(p, a, b, c));
   }
   // Before any call, which would make the compiler keep the sum in memory throughout the loop.
   if (floor > 0) result.residual_std = std::sqrt(sum_sq / static_cast<double>(floor));
@@ -135,7 +135,7 @@ ResidualHistogram residualHistogram(const pcl::PointCloud<PointRDM>& cloud,
               c = static_cast<float>(plane[2]), scale = static_cast<float>(1.0 / h.width);
   for (const auto i : valid) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    const float bin = std::abs(p.dk - (a * p.u + b * p.v + c)) * scale;  // float like split()
+    const float bin = std::abs(planeResidual(p, a, b, c)) * scale;  // float like split()
     if (bin < static_cast<float>(ResidualHistogram::kBins))
       ++h.counts[static_cast<std::size_t>(bin)];
   }

@@ -1,4 +1,5 @@
 #include "multislit/gait.h"
+#include "multislit/units.h"
 
 #include "config_check.h"
 
@@ -9,8 +10,6 @@
 namespace multislit {
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 constexpr detail::FieldCheck require("GaitConfig");
 

@@ -1,4 +1,5 @@
 #include "multislit/obstacles.h"
+#include "multislit/plane_model.h"
 
 #include "config_check.h"
 
@@ -23,10 +24,6 @@ namespace multislit {
 namespace {
 
 constexpr detail::FieldCheck require("ObstacleClustererConfig");
-
-bool hasXYZ(const PointRDM& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
 
 /// Disjoint sets over 0 .. n-1 (union by size, path halving).
 class DisjointSets {
@@ -288,7 +285,7 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
   for (const auto i : indices) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
     slits.insert(p.slit);
-    const double residual = p.dk - (floor.plane[0] * p.u + floor.plane[1] * p.v + floor.plane[2]);
+    const double residual = planeResidual(p, floor.plane);
     o.max_residual = std::max(o.max_residual, std::abs(residual));
     if (!hasXYZ(p)) continue;
     const Eigen::Vector3d camera(p.x, p.y, p.z);

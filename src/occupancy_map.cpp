@@ -1,4 +1,5 @@
 #include "multislit/occupancy_map.h"
+#include "multislit/plane_model.h"
 
 #include "config_check.h"
 
@@ -20,10 +21,6 @@ namespace {
 constexpr detail::FieldCheck require("OccupancyMapConfig");
 
 bool isProbability(double p) { return p > 0 && p < 1; }
-
-bool hasXYZ(const PointRDM& p) {
-  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
 
 octomap::point3d toOcto(const Eigen::Vector3d& p) {
   return octomap::point3d(static_cast<float>(p.x()), static_cast<float>(p.y()),
@@ -157,9 +154,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
       if (m.z() <= config_.max_height) e.mark(keyOf(m), FrameEvidence::kHit);
     }
   // Weak points: groups rejected as noise, and floor points high above the plane.
-  const auto residual = [&](const PointRDM& p) {
-    return p.dk - (floor.plane[0] * p.u + floor.plane[1] * p.v + floor.plane[2]);
-  };
+  const auto residual = [&](const PointRDM& p) { return planeResidual(p, floor.plane); };
   for (const auto i : obstacles.rejected) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
     if (!hasXYZ(p) || residual(p) <= 0) continue;

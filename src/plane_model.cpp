@@ -18,11 +18,6 @@ namespace {
 constexpr unsigned kSampleSize = 3;  // three points determine dk = A u + B v + C
 constexpr unsigned kModelSize = 3;   // (A, B, C)
 
-/// Signed residual dk - (A u + B v + C) [px]; NaN for an invalid point.
-inline float residual(const PointRDM& p, float a, float b, float c) {
-  return p.dk - (a * p.u + b * p.v + c);
-}
-
 /// The sums of eq. (2), taken about an origin (u0, v0, dk0) near the points (the first point
 /// added, or one given) so that they stay small; solve() shifts C back.
 class PlaneSums {
@@ -229,7 +224,7 @@ RDMapPlaneFit SampleConsensusModelRDMapPlane::fitWithinDistance(
     PlaneSums sums;
     for (const auto i : *indices_) {
       const PointRDM& p = (*input_)[i];
-      if (std::abs(residual(p, a, b, model_coefficients[2])) <= t) sums.add(p.u, p.v, p.dk);
+      if (std::abs(planeResidual(p, a, b, model_coefficients[2])) <= t) sums.add(p.u, p.v, p.dk);
     }
     return sums.solve();
   }
@@ -396,7 +391,7 @@ void SampleConsensusModelRDMapPlane::getDistancesToModel(const Eigen::VectorXf& 
     return;
   }
   for (std::size_t k = 0; k < n; ++k) {
-    const float r = std::abs(residual((*input_)[(*indices_)[k]], a, b, c));
+    const float r = std::abs(planeResidual((*input_)[(*indices_)[k]], a, b, c));
     distances[k] = std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
   }
 }
@@ -416,7 +411,7 @@ void SampleConsensusModelRDMapPlane::selectWithinDistance(const Eigen::VectorXf&
   error_sqr_dists_.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
     const float r = std::abs(in_cache ? dk_[k] - (a * u_[k] + b * v_[k] + cc)
-                                      : residual((*input_)[(*indices_)[k]], a, b, c));
+                                      : planeResidual((*input_)[(*indices_)[k]], a, b, c));
     if (r <= t) {  // false for NaN
       inliers.push_back((*indices_)[k]);
       error_sqr_dists_.push_back(static_cast<double>(r) * r);
@@ -436,7 +431,7 @@ std::size_t SampleConsensusModelRDMapPlane::countWithinDistance(
     return countNear(u, v, dk, 0, u_.size(), a, b, centredC(model_coefficients), t);
   }
   std::size_t count = 0;
-  for (const auto i : *indices_) count += std::abs(residual((*input_)[i], a, b, c)) <= t;
+  for (const auto i : *indices_) count += std::abs(planeResidual((*input_)[i], a, b, c)) <= t;
   return count;
 }
 
@@ -491,7 +486,7 @@ bool SampleConsensusModelRDMapPlane::doSamplesVerifyModel(const std::set<pcl::in
   if (model_coefficients.size() != kModelSize || !isModelValid(model_coefficients)) return false;
   const float a = model_coefficients[0], b = model_coefficients[1], c = model_coefficients[2];
   for (const auto i : indices)
-    if (!(std::abs(residual((*input_)[i], a, b, c)) <= threshold)) return false;
+    if (!(std::abs(planeResidual((*input_)[i], a, b, c)) <= threshold)) return false;
   return true;
 }
 

@@ -1,4 +1,5 @@
 #include "multislit/sensor.h"
+#include "multislit/units.h"
 
 #include "yaml_io.h"
 
@@ -8,8 +9,6 @@
 
 namespace multislit {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 void require(bool ok, const std::string& field, const std::string& rule) {
   if (!ok) throw std::invalid_argument("sensor config: " + field + " " + rule);

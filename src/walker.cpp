@@ -1,4 +1,5 @@
 #include "multislit/walker.h"
+#include "multislit/units.h"
 
 #include "config_check.h"
 
@@ -10,8 +11,6 @@
 namespace multislit {
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 constexpr detail::FieldCheck require("WalkerConfig");
 

@@ -1,7 +1,7 @@
 // MultiSlitGrabber: PCL signals, headers, back-pressure, stop() from callbacks and with sources
 // that hang, and end to end over GigE Vision on 127.0.0.1 (CameraEmulator + AravisSource).
 #include "multislit/grabber.h"
-#include "multislit/sim/camera_emulator.h"
+#include "camera_test_support.h"
 #include "multislit/sim/simulated_source.h"
 
 #include <gtest/gtest.h>
@@ -23,31 +23,11 @@
 namespace multislit {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using namespace test;
 using std::chrono::milliseconds;
 using RdmapPtr = pcl::PointCloud<PointRDM>::ConstPtr;
 using XyzPtr = pcl::PointCloud<pcl::PointXYZ>::ConstPtr;
 using FramePtr = std::shared_ptr<const Frame>;
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-std::uint64_t nowMicros() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
-
-// Polls `done` until it holds or `ms` passed. Deadlines are generous (a loaded 2-core machine,
-// sanitizers): the wait ends as soon as the event happens, so they cost nothing when all is well.
-constexpr double kDeadlineMs = 20000;
-
-bool waitFor(const std::function<bool()>& done, double ms = kDeadlineMs) {
-  const auto t0 = Clock::now();
-  while (!done() && msSince(t0) < ms) std::this_thread::sleep_for(milliseconds(5));
-  return done();
-}
 
 // Fifteen straight slits: a cheap image the reference finds slits in (no rendering).
 cv::Mat slitImage(double shift) {
@@ -399,24 +379,6 @@ TEST(MultiSlitGrabber, DestructionWhileRunningIsSafe) {
 }
 
 // --- end to end over GigE Vision on 127.0.0.1 ------------------------------------------------
-
-std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& images,
-                                             const EmulatorConfig& config = {}) {
-  const auto deadline = Clock::now() + std::chrono::seconds(30);
-  for (;;) {
-    try {
-      return std::make_unique<CameraEmulator>(images, config);
-    } catch (const std::runtime_error&) {
-      if (Clock::now() > deadline) return nullptr;
-      std::this_thread::sleep_for(milliseconds(200));
-    }
-  }
-}
-
-#define REQUIRE_EMULATOR(emulator)                                                       \
-  if (!(emulator))                                                                       \
-  GTEST_SKIP() << "127.0.0.1:3956 stayed taken by another GigE Vision camera for 30 s, " \
-                  "so the fake camera could not start"
 
 std::shared_ptr<AravisSource> gigeSource(double fps) {
   AravisConfig c;

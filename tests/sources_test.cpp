@@ -1,7 +1,7 @@
 // Frame sources: recorded images (time stamps, pacing, stepping), the simulator, and a GigE
 // Vision camera through Aravis, served on 127.0.0.1 by CameraEmulator (never discovered).
 #include "multislit/sources.h"
-#include "multislit/sim/camera_emulator.h"
+#include "camera_test_support.h"
 #include "multislit/sim/simulated_source.h"
 
 #include <gtest/gtest.h>
@@ -19,22 +19,8 @@ namespace multislit {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
+using namespace test;
 using std::chrono::milliseconds;
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-// Deadline of the waits for something to happen: generous for a loaded 2-core machine with
-// sanitizers; the loops end as soon as it happened, so it costs nothing when all is well.
-constexpr double kDeadlineMs = 20000;
-
-std::uint64_t nowMicros() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
 
 fs::path freshFolder(const std::string& name) {
   const fs::path dir = fs::path(testing::TempDir()) /
@@ -59,25 +45,6 @@ bool identical(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() &&
          cv::countNonZero(a.reshape(1) != b.reshape(1)) == 0;
 }
-
-// The emulator binds 127.0.0.1:3956; another test process may hold it for a while.
-std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& images,
-                                             const EmulatorConfig& config = {}) {
-  const auto deadline = Clock::now() + std::chrono::seconds(30);
-  for (;;) {
-    try {
-      return std::make_unique<CameraEmulator>(images, config);
-    } catch (const std::runtime_error&) {
-      if (Clock::now() > deadline) return nullptr;
-      std::this_thread::sleep_for(milliseconds(200));
-    }
-  }
-}
-
-#define REQUIRE_EMULATOR(emulator)                                                       \
-  if (!(emulator))                                                                       \
-  GTEST_SKIP() << "127.0.0.1:3956 stayed taken by another GigE Vision camera for 30 s, " \
-                  "so the fake camera could not start"
 
 AravisConfig cameraConfig(const cv::Mat& image, double fps) {
   AravisConfig c;

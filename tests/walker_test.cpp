@@ -6,6 +6,7 @@
 #include "multislit/gait.h"
 #include "multislit/sim/rdmap_synth.h"
 #include "multislit/sim/walk.h"
+#include "multislit/units.h"
 
 #include <gtest/gtest.h>
 
@@ -17,8 +18,6 @@
 using namespace multislit;
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 const Reference& reference() {
   static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});

@@ -32,6 +32,16 @@ inline bool isValidRDMPoint(const PointRDM& p) {
   return (p.u - p.u) + (p.v - p.v) + (p.dk - p.dk) == 0.0f;
 }
 
+/// eq. (1): the signed residual dk - (A u + B v + C) of a point against the plane (A, B, C) [px];
+/// > 0 above the floor (nearer to the sensor). In float, as the per-point loops compute it.
+inline float planeResidual(const PointRDM& p, float a, float b, float c) {
+  return p.dk - (a * p.u + b * p.v + c);
+}
+/// The same in double, for a plane (A, B, C) as FloorResult::plane holds it [px].
+inline double planeResidual(const PointRDM& p, const Eigen::Vector3d& plane) {
+  return p.dk - (plane[0] * p.u + plane[1] * p.v + plane[2]);
+}
+
 /// Least-squares plane of eq. (2) through some points of an RDMap.
 struct RDMapPlaneFit {
   bool ok = false;                                  ///< false: fewer than 3 points or degenerate

@@ -6,6 +6,7 @@
 #include <pcl/point_types.h>
 #include <pcl/register_point_struct.h>
 
+#include <cmath>
 #include <cstdint>
 
 namespace multislit {
@@ -22,6 +23,12 @@ struct EIGEN_ALIGN16 PointRDM {
   std::int32_t slit;  ///< slit index
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
+
+/// True when the point has a metric position: x, y and z finite (the reference has a metric scale
+/// and the point was measured).
+inline bool hasXYZ(const PointRDM& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+}
 
 }  // namespace multislit
 

@@ -25,8 +25,8 @@ void RDMapSynthesizerConfig::validate() const {
 Reference renderFloorReference(const SensorConfig& sensor, const MountConfig& reference_mount,
                                const RenderConfig& render) {
   const Simulator simulator(sensor, render);
-  const Eigen::Isometry3d pose = simulator.geometry().robotFromCamera(reference_mount);
-  Reference reference = Reference::fromImage(simulator.render(Scene{}, pose, 1u << 30).image);
+  Reference reference =
+      Reference::fromImage(simulator.renderReference(Scene{}, reference_mount).image);
   reference.setNominalScale(sensor, reference_mount);
   return reference;
 }

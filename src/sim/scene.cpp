@@ -1,4 +1,5 @@
 #include "multislit/sim/scene.h"
+#include "multislit/units.h"
 
 #include "yaml_io.h"
 
@@ -12,8 +13,6 @@ namespace multislit {
 namespace {
 
 constexpr double kEps = 1e-9;
-constexpr double kDeg = M_PI / 180.0;
-
 // Value noise on an integer lattice, smoothly interpolated; in [-1, 1].
 double hash01(int64_t x, int64_t y, uint64_t seed) {
   uint64_t h = seed * 0x9E3779B97F4A7C15ULL ^ static_cast<uint64_t>(x) * 0xBF58476D1CE4E5B9ULL ^

@@ -69,9 +69,8 @@ std::optional<Frame> SimulatorSource::next(std::chrono::milliseconds timeout) {
 Reference SimulatorSource::makeReference(const ReferenceConfig& config) const {
   // The bare floor seen from the reference pose (paper Sec. II-C).
   const Scenario reference = makeScenario("reference");
-  const Eigen::Isometry3d pose = simulator_.geometry().robotFromCamera(scenario_.reference_mount);
-  Reference ref =
-      Reference::fromImage(simulator_.render(reference.scene, pose, 1u << 30).image, config);
+  Reference ref = Reference::fromImage(
+      simulator_.renderReference(reference.scene, scenario_.reference_mount).image, config);
   ref.setNominalScale(simulator_.geometry().config(), scenario_.reference_mount);
   return ref;
 }

@@ -211,6 +211,11 @@ Simulator::Simulator(const SensorConfig& sensor, const RenderConfig& render)
     gamma_quantiles_ = gammaQuantiles(render_.speckle_contrast);
 }
 
+RenderedFrame Simulator::renderReference(const Scene& floor,
+                                         const MountConfig& reference_mount) const {
+  return render(floor, geometry_.robotFromCamera(reference_mount), kReferenceFrame);
+}
+
 RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
                                 uint64_t frame) const {
   const int width = geometry_.config().camera.width, height = geometry_.config().camera.height;

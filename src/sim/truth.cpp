@@ -1,4 +1,5 @@
 #include "multislit/sim/truth.h"
+#include "multislit/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +8,6 @@
 namespace multislit {
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();

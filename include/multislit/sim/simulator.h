@@ -69,6 +69,11 @@ class Simulator {
   /// Renders what the camera at `world_from_camera` sees of `scene`. `frame` selects the noise.
   RenderedFrame render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
                        uint64_t frame = 0) const;
+  /// The frame number of reference images: their noise is drawn apart from every sequence's.
+  static constexpr uint64_t kReferenceFrame = 1u << 30;
+  /// The reference image (Sec. II-C): `floor`, a scene of the plane alone, seen by the camera at
+  /// `reference_mount` on the robot at the world origin, with the noise of kReferenceFrame.
+  RenderedFrame renderReference(const Scene& floor, const MountConfig& reference_mount) const;
   /// Only the ground truth (no image): for each slit and row, the first surface its light hits,
   /// kept when the camera sees that point.
   std::vector<SlitCrossing> groundTruth(const Scene& scene,
