@@ -214,6 +214,7 @@ int runMap(int argc, char** argv) {
       recorder.skip();
       continue;
     }
+    const double extract_start = threadCpuSeconds();
     try {
       input->cloud =
           extractor.extract(frame->image, frame->stamp_us, static_cast<std::uint32_t>(frame->seq));
@@ -221,10 +222,11 @@ int runMap(int argc, char** argv) {
       if (bad_frames++ == 0) std::cerr << "frame " << frame->seq << ": " << e.what() << "\n";
       continue;
     }
+    const double extract_seconds = threadCpuSeconds() - extract_start;
     clock = frame->stamp_source;
     const PipelineResult r = pipeline.process(*input);
     poses.follow(r.walker);
-    recorder.record(frame->seq, frame->stamp_us, *input->cloud, r, pipeline.map());
+    recorder.record(frame->seq, frame->stamp_us, extract_seconds, *input->cloud, r, pipeline.map());
     ++processed;
     status(processed, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
            r, pipeline.map().occupiedCount());
@@ -235,9 +237,10 @@ int runMap(int argc, char** argv) {
   if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string heading = "multislit map: " + in.description +
-                              " (stamps: " + stampSourceName(clock) + " clock), poses from " +
-                              poses.description() +
+  const std::string stamps =
+      args.has("camera") ? std::string(stampSourceName(clock)) + " clock" : std::string("recorded");
+  const std::string heading = "multislit map: " + in.description + " (stamps: " + stamps +
+                              "), poses from " + poses.description() +
                               (bad_frames ? ", " + std::to_string(bad_frames) + " bad frames" : "");
   std::cout << recorder.finish(pipeline, heading, seconds, g_stop);
   if (processed == 0 && bad_frames > 0)

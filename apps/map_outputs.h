@@ -19,10 +19,11 @@ class MapRecorder {
   /// write.
   explicit MapRecorder(const std::filesystem::path& out);
 
-  /// One processed frame: `seq` and `stamp_us` of the source, the cloud given to the pipeline,
-  /// what it gave and its map after the frame.
-  void record(std::uint64_t seq, std::uint64_t stamp_us, const pcl::PointCloud<PointRDM>& cloud,
-              const PipelineResult& result, const OccupancyMap& map);
+  /// One processed frame: `seq` and `stamp_us` of the source, the CPU time of its extraction
+  /// [s], the cloud given to the pipeline, what it gave and its map after the frame.
+  void record(std::uint64_t seq, std::uint64_t stamp_us, double extract_seconds,
+              const pcl::PointCloud<PointRDM>& cloud, const PipelineResult& result,
+              const OccupancyMap& map);
   /// A frame that got no pose (skipped, not processed).
   void skip() { ++skipped_; }
 
@@ -41,6 +42,7 @@ class MapRecorder {
   std::size_t frames_ = 0, skipped_ = 0, no_floor_ = 0, groups_ = 0;
   std::size_t decisions_[3] = {0, 0, 0};  ///< walk, turn, stop
   PipelineTimes sum_;
+  double extract_sum_ = 0.0;    ///< [s]
   std::uint64_t best_seq_ = 0;  ///< the frame with most obstacle points (Fig. 14)
   std::size_t best_points_ = 0;
   pcl::PointCloud<PointRDM> best_cloud_;

@@ -6,17 +6,9 @@ namespace multislit {
 
 namespace {
 
-/// CPU time of the calling thread [s]: the stages run on it, and other processes' use of the core
-/// does not count.
-double threadSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
 /// Seconds since `t0`, and `t0` moved to now.
 double lap(double& t0) {
-  const double now = threadSeconds();
+  const double now = threadCpuSeconds();
   const double s = now - t0;
   t0 = now;
   return s;
@@ -28,6 +20,12 @@ const PipelineConfig& validated(const PipelineConfig& config) {
 }
 
 }  // namespace
+
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 void PipelineConfig::validate() const {
   sensor.validate();
@@ -48,7 +46,7 @@ Pipeline::Pipeline(const PipelineConfig& config)
 
 PipelineResult Pipeline::process(const PipelineInput& in) {
   PipelineResult r;
-  double t0 = threadSeconds();
+  double t0 = threadCpuSeconds();
   const Eigen::Isometry3d robot_from_camera =
       in.robot_from_camera ? *in.robot_from_camera : geometry_.robotFromCamera();
   r.body = Pose2D::onFloor(in.world_from_robot);

@@ -71,7 +71,7 @@ grep -q "(interrupted)" "$work/interrupted/summary.txt" || fail "no summary afte
 [[ -s $work/interrupted/map.bt && -s $work/interrupted/map_top.png ]] || fail "no map after Ctrl-C"
 [[ $(tail -c 1 "$work/interrupted/decisions.csv" | od -An -c | tr -d ' ') == '\n' ]] ||
   fail "decisions.csv cut mid-row"
-awk -F, 'NF != 18 { exit 1 }' "$work/interrupted/decisions.csv" || fail "a short row"
+awk -F, 'NF != 19 { exit 1 }' "$work/interrupted/decisions.csv" || fail "a short row"
 echo "Ctrl-C: rc 130 after $(($(wc -l <"$work/interrupted/decisions.csv") - 1)) whole rows"
 
 # 4. Errors.

@@ -44,8 +44,11 @@ struct PipelineInput {
   Foot next_foot = Foot::Left;  ///< the foot that swings next (for the footsteps ahead)
 };
 
-/// Time of each stage of one frame: CPU time of the calling thread, which other processes on the
-/// same core do not inflate [s].
+/// CPU time of the calling thread [s]: the clock of PipelineTimes. Other processes on the same
+/// core do not inflate it (a busy 2-core robot computer, a CI machine).
+double threadCpuSeconds();
+
+/// Time of each stage of one frame: CPU time of the calling thread (threadCpuSeconds) [s].
 struct PipelineTimes {
   double floor = 0.0;      ///< RANSAC, eq. (2) refit, noise, split
   double obstacles = 0.0;  ///< noise rule, groups, sizes
