@@ -211,6 +211,7 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
 }
 
 void Reference::save(const std::string& path) const {
+  validate();  // never a file that load() would refuse
   cv::FileStorage fs = openYamlForWrite(path, "calibration");
   fs << "image_width" << image_width << "image_height" << image_height;
   fs << "camera_id" << camera_id;
@@ -249,9 +250,6 @@ Reference Reference::load(const std::string& path) {
     readField(sc, "cx", ref.scale.cx);
     readField(sc, "cy", ref.scale.cy);
     readField(sc, "disparity_constant", ref.scale.disparity_constant);
-    if (ref.image_width <= 0 || ref.image_height <= 0)
-      throw std::invalid_argument("image_width and image_height must be > 0");
-    if (ref.region_width < 3) throw std::invalid_argument("region_width must be >= 3");
     const cv::FileNode list = fs["slits"];
     if (!list.isSeq() || list.size() == 0)
       throw std::invalid_argument("'slits' must be a non-empty list");
@@ -260,16 +258,9 @@ Reference Reference::load(const std::string& path) {
       readField(n, "first_row", s.first_row);
       n["u"] >> s.u;
       if (!n["u_inf"].empty()) n["u_inf"] >> s.u_inf;
-      if (s.u.empty())
-        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) + ": 'u' is empty");
-      if (!s.u_inf.empty() && s.u_inf.size() != s.u.size())
-        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) +
-                                    ": 'u_inf' and 'u' differ in length");
-      if (s.first_row < 0 || s.lastRow() >= ref.image_height)
-        throw std::invalid_argument("slit " + std::to_string(ref.slits.size()) +
-                                    ": rows outside the image");
       ref.slits.push_back(std::move(s));
     }
+    ref.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("calibration '" + path + "': " + e.what());
   } catch (const cv::Exception& e) {

@@ -30,6 +30,7 @@ struct ReferenceSlit {
   int first_row = 0;
   std::vector<float> u;      ///< reference column per row [px]
   std::vector<float> u_inf;  ///< column of the same ray at infinite depth [px] (metric scale)
+  /// The last row (Reference::validate() keeps it inside the image, so it fits an int).
   int lastRow() const { return first_row + static_cast<int>(u.size()) - 1; }
 };
 
@@ -75,7 +76,14 @@ class Reference {
   double calibrateWithPlanes(const std::vector<cv::Mat>& images, const std::vector<double>& depths,
                              const CameraConfig& camera, const ReferenceConfig& config = {});
 
+  /// Throws std::invalid_argument naming the field unless every value is in range: image sizes
+  /// up to 16384 px, region_width in 3 .. image_width, finite widths and scale, slits inside
+  /// the image, adjacent slits at least region_width apart (regions never overlap).
+  void validate() const;
+
   void save(const std::string& path) const;
+  /// Reads save()'s file and validates it; throws std::invalid_argument naming the file and the
+  /// field (std::runtime_error when it cannot be read).
   static Reference load(const std::string& path);
 };
 

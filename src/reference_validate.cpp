@@ -1,0 +1,94 @@
+// Reference::validate: the rules every reference obeys, whether found in an image or loaded from a
+// calibration file (which anyone can edit): sizes within the camera, finite values, slits inside
+// the image and apart from each other by at least the assigned region.
+#include "multislit/reference.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace multislit {
+
+namespace {
+
+/// Largest image side accepted [px]: 4x the paper's camera, a 16k sensor.
+constexpr int kMaxImageSide = 16384;
+
+void require(bool ok, const std::string& field, const std::string& rule) {
+  if (!ok) throw std::invalid_argument(field + " " + rule);
+}
+
+/// Rows of slit `s` as [first, last], in 64 bits (a corrupt first_row must not overflow).
+long long lastRowOf(const ReferenceSlit& s) {
+  return static_cast<long long>(s.first_row) + static_cast<long long>(s.u.size()) - 1;
+}
+
+void validateSlit(const Reference& ref, std::size_t k) {
+  const ReferenceSlit& s = ref.slits[k];
+  const std::string name = "slits[" + std::to_string(k) + "]";
+  require(!s.u.empty(), name + ".u", "must not be empty");
+  require(s.u_inf.empty() || s.u_inf.size() == s.u.size(), name + ".u_inf",
+          "must have as many values as u");
+  require(s.first_row >= 0 && lastRowOf(s) < ref.image_height, name + ".first_row",
+          "and the length of u must keep the slit's rows inside the image (0 .. " +
+              std::to_string(ref.image_height - 1) + ")");
+  std::size_t measured = 0;
+  for (std::size_t j = 0; j < s.u.size(); ++j) {
+    const float u = s.u[j];
+    if (std::isnan(u)) continue;  // no point on that row
+    require(std::isfinite(u) && u >= 0 && u <= static_cast<float>(ref.image_width - 1),
+            name + ".u[" + std::to_string(j) + "]",
+            "must be a column inside the image or .nan (is " + std::to_string(u) + ")");
+    require(s.u_inf.empty() || std::isfinite(s.u_inf[j]),
+            name + ".u_inf[" + std::to_string(j) + "]", "must be finite where u is");
+    ++measured;
+  }
+  require(measured > 0, name + ".u", "must hold at least one measured column");
+}
+
+/// Adjacent slits are at least a region apart on every row they share: regions never overlap.
+void validateSpacing(const Reference& ref, std::size_t k) {
+  const ReferenceSlit &a = ref.slits[k - 1], &b = ref.slits[k];
+  const long long first = std::max(a.first_row, b.first_row);
+  const long long last = std::min(lastRowOf(a), lastRowOf(b));
+  double closest = std::numeric_limits<double>::infinity();
+  for (long long row = first; row <= last; ++row) {
+    const float ua = a.u[static_cast<std::size_t>(row - a.first_row)];
+    const float ub = b.u[static_cast<std::size_t>(row - b.first_row)];
+    if (!std::isnan(ua) && !std::isnan(ub)) closest = std::min(closest, std::abs(double(ub - ua)));
+  }
+  require(closest >= ref.region_width - 1.0, "slits[" + std::to_string(k) + "]",
+          "must lie at least region_width (" + std::to_string(ref.region_width) +
+              " px) from slits[" + std::to_string(k - 1) + "] on the rows they share (closest " +
+              std::to_string(closest) + " px): the same slit twice, or regions that overlap");
+}
+
+}  // namespace
+
+void Reference::validate() const {
+  require(image_width > 0 && image_width <= kMaxImageSide && image_height > 0 &&
+              image_height <= kMaxImageSide,
+          "image_width",
+          "and image_height must be in 1 .. " + std::to_string(kMaxImageSide) + " px");
+  require(region_width >= 3 && region_width <= image_width, "region_width",
+          "must be in 3 .. image_width (" + std::to_string(image_width) + ") px");
+  require(max_region_width >= 0 && max_region_width <= image_width, "max_region_width",
+          "must be in 0 .. image_width px");
+  require(std::isfinite(profile_width) && profile_width > 0 && profile_width <= region_width,
+          "profile_width", "must be finite, > 0 and <= region_width px");
+  require(std::isfinite(smoothing_rms) && smoothing_rms >= 0, "smoothing_rms",
+          "must be finite and >= 0 px");
+  require(std::isfinite(scale.f) && scale.f >= 0, "scale.f", "must be finite and >= 0 px");
+  require(std::isfinite(scale.cx) && std::isfinite(scale.cy), "scale.cx", "and cy must be finite");
+  require(std::isfinite(scale.disparity_constant) && scale.disparity_constant >= 0,
+          "scale.disparity_constant", "must be finite and >= 0 px m");
+  require(scale.source == "none" || scale.valid(), "scale.f",
+          "and disparity_constant must be > 0 when scale.source is '" + scale.source + "'");
+  require(!slits.empty() && slits.size() <= 256, "slits", "must hold 1 .. 256 slits");
+  for (std::size_t k = 0; k < slits.size(); ++k) validateSlit(*this, k);
+  for (std::size_t k = 1; k < slits.size(); ++k) validateSpacing(*this, k);
+}
+
+}  // namespace multislit
