@@ -237,6 +237,10 @@ Reference Reference::load(const std::string& path) {
   Reference ref;
   try {
     const cv::FileNode root = fs.root();
+    checkKeys(root, "",
+              {"image_width", "image_height", "camera_id", "region_width", "max_region_width",
+               "profile_width", "smoothing_rms", "scale", "slits"});
+    checkKeys(fs["scale"], "scale", {"source", "f", "cx", "cy", "disparity_constant"});
     readField(root, "image_width", ref.image_width);
     readField(root, "image_height", ref.image_height);
     readField(root, "camera_id", ref.camera_id);
@@ -254,6 +258,7 @@ Reference Reference::load(const std::string& path) {
     if (!list.isSeq() || list.size() == 0)
       throw std::invalid_argument("'slits' must be a non-empty list");
     for (const cv::FileNode& n : list) {
+      checkKeys(n, "slits[" + std::to_string(ref.slits.size()) + "]", {"first_row", "u", "u_inf"});
       ReferenceSlit s;
       readField(n, "first_row", s.first_row);
       n["u"] >> s.u;

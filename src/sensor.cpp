@@ -46,9 +46,10 @@ void SensorConfig::validate() const {
   require(std::abs(m.forward) < 1, "mount.forward", "must be in (-1, 1) m");
 }
 
-SensorConfig SensorConfig::load(const std::string& path) {
-  cv::FileStorage fs = openYamlForRead(path, "sensor config");
-  SensorConfig s;
+namespace {
+
+// Every key of the three sections into `s` (absent keys keep their defaults).
+void readSections(const cv::FileStorage& fs, SensorConfig& s) {
   const cv::FileNode c = fs["camera"];
   readField(c, "width", s.camera.width);
   readField(c, "height", s.camera.height);
@@ -69,7 +70,22 @@ SensorConfig SensorConfig::load(const std::string& path) {
   readField(m, "roll", s.mount.roll);
   readField(m, "height", s.mount.height);
   readField(m, "forward", s.mount.forward);
+}
+
+}  // namespace
+
+SensorConfig SensorConfig::load(const std::string& path) {
+  cv::FileStorage fs = openYamlForRead(path, "sensor config");
+  SensorConfig s;
   try {
+    checkKeys(fs.root(), "", {"camera", "projector", "mount"});
+    checkKeys(fs["camera"], "camera",
+              {"width", "height", "pixel_size", "focal_length", "principal_x", "principal_y"});
+    checkKeys(fs["projector"], "projector",
+              {"slit_count", "slit_spacing", "slit_half_length", "curvature", "sheet_sigma",
+               "baseline", "rotation"});
+    checkKeys(fs["mount"], "mount", {"tilt", "roll", "height", "forward"});
+    readSections(fs, s);
     s.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());

@@ -79,6 +79,9 @@ TEST(Reference, OutOfRangeValuesAreRefusedNamingTheField) {
       {"first_row.yaml", "first_row: [0-9]+", "first_row: 2147483600", "slits[0].first_row"},
       {"big_image.yaml", "image_width: [0-9]+", "image_width: 20000", "image_width"},
       {"u_outside.yaml", "u: \\[ [^,]*,", "u: [ 5000.,", "slits[0].u[0]"},
+      {"unknown.yaml", "profile_width:", "profil_width:", "unknown key 'profil_width'"},
+      {"twice.yaml", "\nregion_width: ([0-9]+)", "\nregion_width: $1\nregion_width: 3",
+       "'region_width' is given twice"},
   };
   for (const Case& c : cases) {
     const std::string error = loadEdited(c.name, c.pattern, c.replacement);

@@ -84,6 +84,32 @@ TEST(SensorConfig, YamlRoundTripAndErrorsNameTheFile) {
   std::remove(bad.c_str());
 }
 
+// A misspelt key, a key given twice or a section of the wrong shape is an error naming it, not a
+// default silently used (OpenCV's parser keeps both entries of a repeated key; load() sees them).
+TEST(SensorConfig, UnknownRepeatedAndMisshapenKeysAreErrors) {
+  const std::string path = tempPath("keys.yaml");
+  const auto error = [&](const std::string& body) {
+    std::ofstream(path) << "%YAML:1.0\n---\n" << body;
+    try {
+      SensorConfig::load(path);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("camera:\n  heigth: 900\n").find("unknown key 'camera.heigth'"),
+            std::string::npos);
+  EXPECT_NE(error("camera:\n  width: 1296\n  width: 640\n").find("'camera.width' is given twice"),
+            std::string::npos);
+  EXPECT_NE(error("mount: [66, 0, 0.445]\n").find("'mount' must be a map"), std::string::npos);
+  EXPECT_NE(error("lens:\n  f: 4\n").find("unknown key 'lens'"), std::string::npos);
+  EXPECT_NE(error("camera:\n  width: 1296\ncamera:\n  width: 640\n").find("'camera' is given"),
+            std::string::npos);
+  EXPECT_NE(error("mount:\n  tilte: 60\n").find(path), std::string::npos);  // the file, too
+  EXPECT_EQ(error("mount:\n  tilt: 60\n"), "");
+  std::remove(path.c_str());
+}
+
 TEST(SensorConfig, CommittedDefaultFileIsTheDefault) {
   const SensorConfig c = SensorConfig::load(std::string(MULTISLIT_DATA_DIR) + "/sensor.yaml");
   const SensorConfig d;

@@ -52,7 +52,8 @@ struct SensorConfig {
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
-  /// OpenCV FileStorage YAML. Missing keys keep their defaults; the result is validated.
+  /// OpenCV FileStorage YAML. Missing keys keep their defaults; unknown or repeated keys and
+  /// sections that are not maps are errors naming the key; the result is validated.
   static SensorConfig load(const std::string& path);
   void save(const std::string& path) const;
 };
