@@ -3,6 +3,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <initializer_list>
 #include <set>
@@ -12,10 +13,61 @@
 
 namespace multislit {
 
+/// Limits on a config file, checked before OpenCV parses it: its parser recurses once per level of
+/// nesting, and a file nested 200 000 brackets deep overflows the stack.
+constexpr std::size_t kMaxYamlBytes = 64u << 20;  ///< [bytes]
+constexpr int kMaxYamlNesting = 64;               ///< levels of [ ] and { }
+constexpr std::size_t kMaxYamlIndent = 1024;      ///< leading spaces of a line (block nesting)
+
+/// Throws std::runtime_error naming the file when it is larger or nested deeper than the limits.
+inline void checkYamlShape(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text;
+  in.seekg(0, std::ios::end);
+  const auto size = static_cast<std::size_t>(std::max<std::streamoff>(0, in.tellg()));
+  if (size > kMaxYamlBytes)
+    throw std::runtime_error(what + " '" + path + "' is " + std::to_string(size) +
+                             " bytes, more than the limit of " + std::to_string(kMaxYamlBytes));
+  text.resize(size);
+  in.seekg(0);
+  in.read(text.data(), static_cast<std::streamsize>(size));
+  int depth = 0, deepest = 0;
+  std::size_t indent = 0, widest = 0;
+  bool line_start = true, comment = false;
+  char quote = 0;
+  for (const char c : text) {
+    if (c == '\n') {
+      line_start = true, comment = false, indent = 0;
+      continue;
+    }
+    if (line_start && c == ' ') widest = std::max(widest, ++indent);
+    line_start = line_start && c == ' ';
+    if (comment) continue;
+    if (quote) {
+      quote = c == quote ? 0 : quote;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '#') {
+      comment = true;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  if (deepest > kMaxYamlNesting || widest > kMaxYamlIndent)
+    throw std::runtime_error(what + " '" + path + "' is nested " +
+                             (deepest > kMaxYamlNesting ? std::to_string(deepest) + " brackets"
+                                                        : std::to_string(widest) + " spaces") +
+                             " deep, more than the limit of " + std::to_string(kMaxYamlNesting) +
+                             " brackets or " + std::to_string(kMaxYamlIndent) + " spaces");
+}
+
 /// Opens a YAML file for reading; throws std::runtime_error naming the file and what it is.
 inline cv::FileStorage openYamlForRead(const std::string& path, const std::string& what) {
   if (!std::ifstream(path).good())
     throw std::runtime_error(what + " '" + path + "' cannot be read");
+  checkYamlShape(path, what);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -110,6 +110,25 @@ TEST(SensorConfig, UnknownRepeatedAndMisshapenKeysAreErrors) {
   std::remove(path.c_str());
 }
 
+// OpenCV's YAML parser recurses per level: 200 000 nested brackets overflowed the stack. The
+// loaders refuse a file nested deeper than 64 brackets (or 1024 spaces) before parsing it.
+TEST(SensorConfig, DeeplyNestedFilesAreRefusedBeforeParsing) {
+  const std::string path = tempPath("nested.yaml");
+  std::ofstream(path) << "%YAML:1.0\n---\ncamera: " << std::string(200000, '[')
+                      << std::string(200000, ']') << "\n";
+  try {
+    SensorConfig::load(path);
+    FAIL() << "a file nested 200000 deep was parsed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("nested 200000 brackets deep"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  std::ofstream(path) << "%YAML:1.0\n---\n# a comment [[[[ is no nesting\nmount:\n  tilt: 60\n";
+  EXPECT_DOUBLE_EQ(SensorConfig::load(path).mount.tilt, 60.0);
+  std::remove(path.c_str());
+}
+
 TEST(SensorConfig, CommittedDefaultFileIsTheDefault) {
   const SensorConfig c = SensorConfig::load(std::string(MULTISLIT_DATA_DIR) + "/sensor.yaml");
   const SensorConfig d;

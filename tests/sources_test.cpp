@@ -332,6 +332,20 @@ TEST(AravisSource, SoftwareTriggerDeliversOneFramePerTrigger) {
   EXPECT_EQ(source.stats().reconnects, 0u);
 }
 
+// Aravis's fake camera binds with SO_REUSEADDR, so a second one would bind too and serve nothing
+// while saying it runs: the emulator refuses a taken port instead.
+TEST(CameraEmulator, ASecondOneOnTheSamePortIsRefused) {
+  const std::vector<cv::Mat> images = noiseImages(1, 64, 48, CV_8UC1);
+  const std::unique_ptr<CameraEmulator> first = makeEmulator(images);
+  REQUIRE_EMULATOR(first);
+  try {
+    CameraEmulator second(images);
+    FAIL() << "a second camera on 127.0.0.1:3956 was started";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("taken"), std::string::npos) << e.what();
+  }
+}
+
 TEST(AravisSource, SurvivesTheCameraDisappearingAndComingBack) {
   const std::vector<cv::Mat> images = noiseImages(2, 160, 120, CV_8UC1);
   std::unique_ptr<CameraEmulator> emulator = makeEmulator(images);

@@ -2,13 +2,39 @@
 #include "multislit/sim/camera_emulator.h"
 #include "aravis_util.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <stdexcept>
 
 namespace multislit {
 
 using aravis::GPtr;
+
+namespace {
+
+constexpr std::uint16_t kGvcpPort = 3956;
+
+// Whether 127.0.0.1:3956 is free. Aravis's fake camera binds with SO_REUSEADDR, so a second one
+// binds too and serves nothing; a socket without it fails to bind while any other holds the port.
+bool gvcpPortFree() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return true;  // cannot tell: let the camera try
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(kGvcpPort);
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool free = ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) == 0;
+  ::close(fd);
+  return free;
+}
+
+}  // namespace
 
 void EmulatorConfig::validate() const {
   auto fail = [](const std::string& field, const std::string& what) {
@@ -72,6 +98,9 @@ CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig
       throw std::invalid_argument("CameraEmulator: images must share size and type");
     impl_->images.push_back(image.isContinuous() ? image : image.clone());
   }
+  if (!gvcpPortFree())
+    throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
+                             ":3956: the port is taken (another multislit emulate or camera?)");
   impl_->camera.reset(arv_gv_fake_camera_new(kAddress, config.serial.c_str()));
   if (!impl_->camera || !arv_gv_fake_camera_is_running(impl_->camera.get()))
     throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
