@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -83,13 +84,37 @@ std::string ArgParser::str(const std::string& name) const {
   return s->second.default_value;
 }
 
+namespace {
+std::string shortNumber(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%g", v);
+  return s;
+}
+}  // namespace
+
 double ArgParser::number(const std::string& name) const {
   const std::string text = str(name);
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno != 0)
-    throw UsageError("--" + name + " must be a number, not '" + text + "'");
+  if (text.empty() || *end != '\0' || errno != 0 || !std::isfinite(v))
+    throw UsageError("--" + name + " must be a finite number, not '" + text + "'");
+  return v;
+}
+
+double ArgParser::number(const std::string& name, double lo, double hi) const {
+  const double v = number(name);
+  if (!(v >= lo && v <= hi))
+    throw UsageError("--" + name + " must be in [" + shortNumber(lo) + ", " + shortNumber(hi) +
+                     "], not " + str(name));
+  return v;
+}
+
+long ArgParser::integer(const std::string& name, long lo, long hi) const {
+  const long v = integer(name);
+  if (v < lo || v > hi)
+    throw UsageError("--" + name + " must be a whole number in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "], not " + str(name));
   return v;
 }
 

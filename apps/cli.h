@@ -29,8 +29,11 @@ class ArgParser {
   bool parse(int argc, char** argv);
 
   std::string str(const std::string& name) const;
-  double number(const std::string& name) const;
+  double number(const std::string& name) const;  ///< finite; NaN and infinity are refused
   long integer(const std::string& name) const;
+  /// The same, refused with a UsageError naming the range unless lo <= value <= hi.
+  double number(const std::string& name, double lo, double hi) const;
+  long integer(const std::string& name, long lo, long hi) const;
   bool has(const std::string& name) const;  ///< flag given, or option given a non-empty value
   std::vector<std::string> list(const std::string& name) const;
   const std::vector<std::string>& rest() const { return positional_values_; }

@@ -71,7 +71,7 @@ Input openInput(const cli::ArgParser& args) {
   if (args.has("simulate")) {
     SimulatorSourceConfig config;
     config.scenario = args.str("simulate");
-    config.frames = static_cast<std::uint64_t>(std::max(0L, args.integer("frames")));
+    config.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
     auto simulator = std::make_unique<SimulatorSource>(config);
     if (!args.has("calibration")) in.reference = simulator->makeReference();
     in.scenario = simulator->scenario();
@@ -85,7 +85,7 @@ Input openInput(const cli::ArgParser& args) {
   if (args.has("camera")) {
     AravisConfig config;
     config.camera = args.str("camera");
-    config.frame_rate = args.number("fps");
+    config.frame_rate = args.number("fps", 0.1, 1000);
     config.roi_width = in.reference.image_width;
     config.roi_height = in.reference.image_height;
     in.source = std::make_unique<AravisSource>(config);
@@ -114,8 +114,7 @@ class Poses {
       throw cli::UsageError("--poses scenario needs --simulate");
     mode_ = choice == "still" || choice == "gait" || choice == "scenario" ? choice : "file";
     if (mode_ == "file") {
-      const double gap = args.number("max-gap");
-      if (!(gap > 0 && gap < 3600)) throw cli::UsageError("--max-gap must be in (0, 3600) s");
+      const double gap = args.number("max-gap", 1e-6, 3600);
       odometry_.emplace(Odometry::load(choice, static_cast<std::uint64_t>(gap * 1e6)));
     }
     scenario_ = in.scenario;
@@ -184,8 +183,7 @@ int runMap(int argc, char** argv) {
       "  multislit map --sequence rec --calibration rec/calibration.yaml --out out/map");
   declareOptions(args);
   if (!args.parse(argc, argv)) return 0;
-  const long max_frames = args.integer("frames");
-  if (max_frames < 0) throw cli::UsageError("--frames must be >= 0");
+  const long max_frames = args.integer("frames", 0, 1000000000);
   Input in = openInput(args);
   PipelineConfig config;
   config.sensor = in.sensor;

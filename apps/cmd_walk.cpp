@@ -49,14 +49,14 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
   if (args.has("sensor")) c.pipeline.sensor = SensorConfig::load(args.str("sensor"));
   c.reference_mount = c.pipeline.sensor.mount;
   c.render = !args.has("synthesize");
-  c.render_config.seed = static_cast<std::uint64_t>(args.integer("seed"));
+  c.render_config.seed = static_cast<std::uint64_t>(args.integer("seed", 0, 1L << 62));
   c.synth.seed = c.render_config.seed;
   c.scene.ball = !args.has("no-ball");
   c.scene.cable = !args.has("no-cable");
-  c.scene.ball_frame = static_cast<int>(args.integer("ball-frame"));
+  c.scene.ball_frame = static_cast<int>(args.integer("ball-frame", 0, 100000000));
   c.scene.ball_roll_frame = c.scene.ball_frame + 60;
-  c.pipeline.foot.step_length = args.number("step-length");
-  c.gait.step_frames = static_cast<int>(args.integer("step-frames"));
+  c.pipeline.foot.step_length = args.number("step-length", 0.001, 0.4);
+  c.gait.step_frames = static_cast<int>(args.integer("step-frames", 2, 100000));
   const std::string cluster = args.str("cluster");
   if (cluster != "grid" && cluster != "euclidean")
     throw cli::UsageError("--cluster must be grid or euclidean");
@@ -341,8 +341,7 @@ int runWalk(int argc, char** argv) {
   declareOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const WalkConfig config = configFromArgs(args);
-  const long frames = args.integer("frames");
-  if (frames < 1) throw cli::UsageError("--frames must be >= 1");
+  const long frames = args.integer("frames", 1, 100000000);
   const std::filesystem::path out = args.str("out");
   std::filesystem::create_directories(out);
 
