@@ -173,6 +173,7 @@ MultiSlitGrabber::MultiSlitGrabber(std::shared_ptr<FrameSource> source, Referenc
   if (!source_) throw std::invalid_argument("MultiSlitGrabber: the source is null");
   rdmap_signal_ = createSignal<sig_cb_rdmap>();
   frame_signal_ = createSignal<sig_cb_frame>();
+  status_signal_ = createSignal<sig_cb_status>();
   if (extractor_.reference().scale.valid()) xyz_signal_ = createSignal<sig_cb_xyz>();
 }
 
@@ -309,13 +310,16 @@ GrabberStats MultiSlitGrabber::getStats() const {
   s.frames_per_second = counters_->fps();
   std::tie(s.latency_median_ms, s.latency_p99_ms) = counters_->latencyPercentiles();
   s.source = source_->stats();
+  s.connected = source_->connected();
   return s;
 }
 
 // The processing thread: mailbox -> extraction -> callbacks.
 void MultiSlitGrabber::processLoop(const std::shared_ptr<Run>& run) {
   const auto poll = std::chrono::milliseconds(config_.poll_ms);
+  bool connected = true;
   for (;;) {
+    reportStatus(connected);
     std::optional<Frame> frame;
     {
       std::unique_lock<std::mutex> lock(run->mutex);
@@ -341,6 +345,19 @@ void MultiSlitGrabber::processLoop(const std::shared_ptr<Run>& run) {
     run->processing_done = true;
   }
   run->changed.notify_all();
+}
+
+// Fires the status signal when the source's connection changed since `connected`.
+void MultiSlitGrabber::reportStatus(bool& connected) {
+  if (source_->connected() == connected) return;
+  connected = !connected;
+  if (status_signal_->num_slots() == 0) return;
+  const SourceStats stats = source_->stats();
+  try {
+    (*status_signal_)(SourceStatus{connected, stats.losses, stats.reconnects, source_->name()});
+  } catch (...) {
+    ++counters_->callback_errors;
+  }
 }
 
 void MultiSlitGrabber::process(Frame& frame, Run& run) {

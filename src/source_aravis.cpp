@@ -220,6 +220,7 @@ SourceStats AravisSource::stats() const {
   s.bad_buffers = bad_buffers_;
   s.read_errors = read_errors_;
   s.reconnects = reconnects_;
+  s.losses = losses_;
   return s;
 }
 
@@ -251,13 +252,16 @@ void AravisSource::open() {
   stamp_source_ = config_.camera_clock && ptpSynchronized(device.get()) ? StampSource::Camera
                                                                         : StampSource::Host;
   camera_ = std::move(cam);
+  connected_ = true;
   last_frame_ = Clock::now();
   trigger_outstanding_ = false;
 }
 
 // A lost camera is not told to stop: its control requests would only time out.
 void AravisSource::release(bool camera_lost) {
+  connected_ = false;
   if (!camera_) return;
+  losses_ += camera_lost;
   if (!camera_lost) {
     Error error;
     arv_camera_stop_acquisition(camera_->camera.get(), error.out());

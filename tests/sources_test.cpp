@@ -372,10 +372,13 @@ TEST(AravisSource, SurvivesTheCameraDisappearingAndComingBack) {
   while (source.stats().read_errors == 0 && msSince(t0) < kDeadlineMs)
     std::this_thread::sleep_for(milliseconds(20));
   EXPECT_GE(source.stats().read_errors, 1u) << "the source did not notice the camera was gone";
+  EXPECT_FALSE(source.connected());
+  EXPECT_EQ(source.stats().losses, 1u);
   const int before = frames;
   emulator = makeEmulator(images);  // ... and comes back
   ASSERT_TRUE(emulator) << "the port was taken while the camera was away";
   EXPECT_TRUE(wait_for(before + 5, kDeadlineMs)) << "no frames after the camera came back";
+  EXPECT_TRUE(source.connected());
   done = true;
   reader.join();
   EXPECT_GE(source.stats().reconnects, 1u);

@@ -43,13 +43,24 @@ struct GrabberStats {
   double latency_median_ms = 0.0;       ///< host arrival to the callbacks, last 256 frames [ms]
   double latency_p99_ms = 0.0;          ///< 99th percentile of the same [ms]
   SourceStats source;                   ///< the source's own counts (bad buffers, reconnects)
+  bool connected = true;                ///< FrameSource::connected() now
+};
+
+/// The source's state, as the status signal reports each change.
+struct SourceStatus {
+  bool connected = true;         ///< false: the camera stopped sending and is being reopened
+  std::uint64_t losses = 0;      ///< times it was lost so far
+  std::uint64_t reconnects = 0;  ///< times it came back
+  std::string source;            ///< FrameSource::name()
 };
 
 /// A pcl::Grabber for the multi-slit sensor. Signals (each computed only while connected):
 ///  - sig_cb_rdmap: the organized RDMap cloud (one row per slit, NaN where nothing was measured);
 ///  - sig_cb_xyz: the same points in metres in the camera frame, organized, NaN kept; offered
 ///    only when the reference has a metric scale;
-///  - sig_cb_frame: the raw image.
+///  - sig_cb_frame: the raw image;
+///  - sig_cb_status: the source lost (a camera that stops sending, noticed after
+///    AravisConfig::lost_after_ms) or back, from the processing thread, within poll_ms of it.
 /// header.stamp is the frame's time in microseconds since the epoch, header.seq the source's
 /// frame number. A live source's frames that arrive while a callback is still busy replace the
 /// waiting one (one slot, counted as dropped); other sources wait for the consumer.
@@ -60,6 +71,7 @@ class MultiSlitGrabber : public pcl::Grabber {
   using sig_cb_rdmap = void(const pcl::PointCloud<PointRDM>::ConstPtr&);
   using sig_cb_xyz = void(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr&);
   using sig_cb_frame = void(const std::shared_ptr<const Frame>&);
+  using sig_cb_status = void(const SourceStatus&);
 
   /// Throws std::invalid_argument for a bad config or a reference without slits.
   MultiSlitGrabber(std::shared_ptr<FrameSource> source, Reference reference,
@@ -90,6 +102,7 @@ class MultiSlitGrabber : public pcl::Grabber {
                               std::shared_ptr<Counters> counters, int poll_ms);
   void processLoop(const std::shared_ptr<Run>& run);
   void process(Frame& frame, Run& run);
+  void reportStatus(bool& connected);
   void reap();
 
   std::shared_ptr<FrameSource> source_;
@@ -100,6 +113,7 @@ class MultiSlitGrabber : public pcl::Grabber {
   boost::signals2::signal<sig_cb_rdmap>* rdmap_signal_ = nullptr;
   boost::signals2::signal<sig_cb_xyz>* xyz_signal_ = nullptr;
   boost::signals2::signal<sig_cb_frame>* frame_signal_ = nullptr;
+  boost::signals2::signal<sig_cb_status>* status_signal_ = nullptr;
 
   mutable std::mutex control_mutex_;           // guards current_ and retired_
   std::shared_ptr<Run> current_;               // the running run, if any

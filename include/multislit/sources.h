@@ -25,6 +25,7 @@ struct SourceStats {
   std::uint64_t bad_buffers = 0;  ///< camera buffers with an error status (lost packets), skipped
   std::uint64_t read_errors = 0;  ///< failed reads: unreadable files, failed camera (re)opens
   std::uint64_t reconnects = 0;   ///< times a lost camera was opened again
+  std::uint64_t losses = 0;       ///< times the camera was lost (no frame while one was due)
 };
 
 /// A stream of frames. start(), next() and stop() are called from one thread at a time;
@@ -52,6 +53,9 @@ class FrameSource {
   virtual bool live() const = 0;
   /// True when no more frames will come (the end of a sequence played once).
   virtual bool finished() const { return false; }
+  /// False while the device is lost and not yet opened again (a camera that stopped sending);
+  /// files and the simulator are always connected.
+  virtual bool connected() const { return true; }
 
   /// Makes a waiting and every later next() return at once, until the next start().
   void interrupt();
@@ -95,7 +99,9 @@ struct AravisConfig {
   int buffer_count = 8;                       ///< stream buffers [-]
   int socket_buffer_bytes = 4 * 1024 * 1024;  ///< GigE stream socket receive buffer [B]
   int packet_size = 0;                        ///< GigE stream packet size [B]; 0: keep the camera's
-  int lost_after_ms = 2000;           ///< no frame for this long while one is due: camera lost [ms]
+  /// No frame for this long while one is due: the camera is lost (connected() false, a status
+  /// signal of the grabber) and reopened with back-off. [ms]
+  int lost_after_ms = 800;
   int reconnect_delay_ms = 100;       ///< first wait before reopening a lost camera [ms]
   int reconnect_max_delay_ms = 2000;  ///< the wait doubles after each failure up to this [ms]
   /// Stamp frames with the camera's own clock when PTP synchronizes it (PtpEnable or
@@ -122,6 +128,7 @@ class AravisSource : public FrameSource {
   std::string name() const override;
   SourceStats stats() const override;
   bool live() const override { return config_.trigger == TriggerMode::FreeRunning; }
+  bool connected() const override { return connected_; }
   const AravisConfig& config() const { return config_; }
   /// The clock of the frames' stamps: Camera when the opened camera's clock is PTP-synchronized.
   StampSource stampSource() const { return stamp_source_; }
@@ -140,7 +147,9 @@ class AravisSource : public FrameSource {
   bool trigger_outstanding_ = false;
   std::uint64_t last_id_ = 0, id_wraps_ = 0;  // 16-bit GigE Vision frame ids made monotonic
   std::atomic<StampSource> stamp_source_{StampSource::Host};
-  std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0};
+  std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0},
+      losses_{0};
+  std::atomic<bool> connected_{false};
 };
 
 // --- recorded images -------------------------------------------------------------------------
