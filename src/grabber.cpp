@@ -3,6 +3,7 @@
 #include "multislit/grabber.h"
 
 #include "config_check.h"
+#include "grabber_counters.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,7 +20,6 @@ namespace multislit {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kLatencyWindow = 256;  // frames kept for the latency percentiles
 
 constexpr detail::FieldCheck require("GrabberConfig");
 
@@ -66,57 +66,6 @@ struct MultiSlitGrabber::Run {
   std::thread acquisition, processing;
 };
 
-struct MultiSlitGrabber::Counters {
-  std::atomic<std::uint64_t> received{0}, processed{0}, dropped{0}, source_errors{0},
-      extraction_errors{0}, callback_errors{0};
-  std::mutex timing_mutex;
-  std::deque<Clock::time_point> done;  // when frames were processed, the last two seconds
-  std::vector<double> latency_ms;      // ring of the last kLatencyWindow latencies
-  std::size_t latency_next = 0;
-
-  void record(Clock::time_point now, double latency) {
-    std::lock_guard<std::mutex> lock(timing_mutex);
-    done.push_back(now);
-    while (!done.empty() && now - done.front() > std::chrono::seconds(2)) done.pop_front();
-    if (latency_ms.size() < kLatencyWindow)
-      latency_ms.push_back(latency);
-    else
-      latency_ms[latency_next] = latency;
-    latency_next = (latency_next + 1) % kLatencyWindow;
-  }
-
-  // Frames per second over the last second; over the last two frames when slower than 1 Hz.
-  double fps() {
-    std::lock_guard<std::mutex> lock(timing_mutex);
-    const Clock::time_point now = Clock::now();
-    while (!done.empty() && now - done.front() > std::chrono::seconds(2)) done.pop_front();
-    const auto first = std::find_if(done.begin(), done.end(), [&](Clock::time_point t) {
-      return now - t <= std::chrono::seconds(1);
-    });
-    const auto in_window = std::distance(first, done.end());
-    auto seconds = [](Clock::duration d) { return std::chrono::duration<double>(d).count(); };
-    if (in_window >= 2) return static_cast<double>(in_window - 1) / seconds(done.back() - *first);
-    if (done.size() >= 2) return 1.0 / seconds(done.back() - done[done.size() - 2]);
-    return 0.0;
-  }
-
-  std::pair<double, double> latencyPercentiles() {
-    std::vector<double> v;
-    {
-      std::lock_guard<std::mutex> lock(timing_mutex);
-      v = latency_ms;
-    }
-    if (v.empty()) return {0.0, 0.0};
-    auto at = [&v](double q) {
-      const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
-      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-      return v[k];
-    };
-    const double median = at(0.5);
-    return {median, at(0.99)};
-  }
-};
-
 // The acquisition thread: source -> mailbox. Never throws; source errors are counted.
 void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
                                        std::shared_ptr<FrameSource> source,
@@ -131,10 +80,16 @@ void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
       if (run->stop) break;
     }
     std::optional<Frame> frame;
+    std::string error;
     try {
       frame = source->next(poll);
+    } catch (const std::exception& e) {
+      error = e.what();
     } catch (...) {
-      ++counters->source_errors;
+      error = "unknown error";
+    }
+    if (!error.empty()) {
+      counters->error(counters->source_errors, source->name() + ": " + error);
       std::unique_lock<std::mutex> lock(run->mutex);
       run->changed.wait_for(lock, poll, [&] { return run->stop; });  // no busy loop on errors
       continue;
@@ -311,6 +266,8 @@ GrabberStats MultiSlitGrabber::getStats() const {
   std::tie(s.latency_median_ms, s.latency_p99_ms) = counters_->latencyPercentiles();
   s.source = source_->stats();
   s.connected = source_->connected();
+  std::lock_guard<std::mutex> lock(counters_->timing_mutex);
+  s.last_error = counters_->last_error;
   return s;
 }
 
@@ -374,8 +331,9 @@ void MultiSlitGrabber::process(Frame& frame, Run& run) {
     try {
       rdmap =
           extractor_.extract(frame.image, frame.stamp_us, static_cast<std::uint32_t>(frame.seq));
-    } catch (const std::exception&) {
-      ++counters_->extraction_errors;  // the image does not fit the reference
+    } catch (const std::exception& e) {  // the image does not fit the reference
+      counters_->error(counters_->extraction_errors,
+                       "frame " + std::to_string(frame.seq) + ": " + e.what());
     }
   }
   const Clock::time_point now = Clock::now();

@@ -44,6 +44,9 @@ struct GrabberStats {
   double latency_p99_ms = 0.0;          ///< 99th percentile of the same [ms]
   SourceStats source;                   ///< the source's own counts (bad buffers, reconnects)
   bool connected = true;                ///< FrameSource::connected() now
+  /// The latest source or extraction error, e.g. a camera sending frames of another size than
+  /// the calibration's ("" when none).
+  std::string last_error;
 };
 
 /// The source's state, as the status signal reports each change.
