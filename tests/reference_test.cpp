@@ -8,7 +8,6 @@
 
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
 
@@ -32,12 +31,28 @@ const std::string& goodText() {
   return text;
 }
 
-/// The error of loading the good calibration with the first match of `pattern` replaced.
-std::string loadEdited(const std::string& name, const std::string& pattern,
-                       const std::string& replacement) {
-  const std::string text = std::regex_replace(goodText(), std::regex(pattern), replacement,
-                                              std::regex_constants::format_first_only);
-  EXPECT_NE(text, goodText()) << pattern;
+/// The good calibration with the first line that starts (after its indent) with `key` + ":"
+/// replaced by `line` (the indent kept); `line` empty: the line is given twice.
+std::string edited(const std::string& key, const std::string& line) {
+  std::string text = goodText();
+  std::size_t at = 0;
+  for (;;) {
+    at = text.find(key + ":", at);
+    if (at == std::string::npos) return text;
+    std::size_t start = at;
+    while (start > 0 && text[start - 1] == ' ') --start;
+    if (start == 0 || text[start - 1] == '\n') break;
+    ++at;
+  }
+  const std::size_t end = text.find('\n', at);
+  const std::string old = text.substr(at, end - at);
+  text.replace(at, end - at, line.empty() ? old + "\n" + old : line);
+  return text;
+}
+
+/// The error of loading `text` written to a file called `name` ("" when it loads).
+std::string loadError(const std::string& name, const std::string& text) {
+  EXPECT_NE(text, goodText()) << name;
   const auto path = std::filesystem::temp_directory_path() / ("multislit_reference_" + name);
   std::ofstream(path) << text;
   try {
@@ -62,31 +77,36 @@ TEST(Reference, TheGoodCalibrationLoadsAndValidates) {
 TEST(Reference, OutOfRangeValuesAreRefusedNamingTheField) {
   struct Case {
     const char* name;
-    const char* pattern;
-    const char* replacement;
+    const char* key;
+    const char* line;  // "": the key's line twice
     const char* field;
   };
   const Case cases[] = {
-      {"nan_width.yaml", "profile_width: [^\\n]*", "profile_width: .nan", "profile_width"},
-      {"zero_width.yaml", "profile_width: [^\\n]*", "profile_width: 0", "profile_width"},
-      {"neg_width.yaml", "profile_width: [^\\n]*", "profile_width: -1", "profile_width"},
-      {"huge_width.yaml", "profile_width: [^\\n]*", "profile_width: 1717986000", "profile_width"},
-      {"inf_width.yaml", "profile_width: [^\\n]*", "profile_width: .inf", "profile_width"},
-      {"region.yaml", "\\nregion_width: [^\\n]*", "\nregion_width: 2000000000", "region_width"},
-      {"dk_inf.yaml", "disparity_constant: [^\\n]*", "disparity_constant: .inf",
-       "scale.disparity_constant"},
-      {"f_inf.yaml", "   f: [^\\n]*", "   f: .inf", "scale.f"},
-      {"first_row.yaml", "first_row: [0-9]+", "first_row: 2147483600", "slits[0].first_row"},
-      {"big_image.yaml", "image_width: [0-9]+", "image_width: 20000", "image_width"},
-      {"u_outside.yaml", "u: \\[ [^,]*,", "u: [ 5000.,", "slits[0].u[0]"},
-      {"unknown.yaml", "profile_width:", "profil_width:", "unknown key 'profil_width'"},
-      {"twice.yaml", "\nregion_width: ([0-9]+)", "\nregion_width: $1\nregion_width: 3",
-       "'region_width' is given twice"},
+      {"nan_width.yaml", "profile_width", "profile_width: .nan", "profile_width"},
+      {"zero_width.yaml", "profile_width", "profile_width: 0", "profile_width"},
+      {"neg_width.yaml", "profile_width", "profile_width: -1", "profile_width"},
+      {"huge_width.yaml", "profile_width", "profile_width: 1717986000", "profile_width"},
+      {"inf_width.yaml", "profile_width", "profile_width: .inf", "profile_width"},
+      {"region.yaml", "region_width", "region_width: 2000000000", "region_width"},
+      {"dk_inf.yaml", "disparity_constant", "disparity_constant: .inf", "scale.disparity_constant"},
+      {"f_inf.yaml", "f", "f: .inf", "scale.f"},
+      {"first_row.yaml", "first_row", "first_row: 2147483600", "slits[0].first_row"},
+      {"big_image.yaml", "image_width", "image_width: 20000", "image_width"},
+      {"unknown.yaml", "profile_width", "profil_width: 9.5", "unknown key 'profil_width'"},
+      {"twice.yaml", "region_width", "", "'region_width' is given twice"},
   };
   for (const Case& c : cases) {
-    const std::string error = loadEdited(c.name, c.pattern, c.replacement);
+    const std::string error = loadError(c.name, edited(c.key, c.line));
     EXPECT_NE(error.find(c.name), std::string::npos) << c.name << ": " << error;  // the file
     EXPECT_NE(error.find(c.field), std::string::npos) << c.name << ": " << error;
+  }
+  Reference outside = good();
+  outside.slits[0].u[0] = 5000.0f;  // a column beyond the 1296 px image
+  try {
+    outside.validate();
+    FAIL() << "a column outside the image was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("slits[0].u[0]"), std::string::npos) << e.what();
   }
 }
 
