@@ -1,0 +1,75 @@
+#include "output_file.h"
+
+#include <unistd.h>
+
+#include <map>
+#include <stdexcept>
+#include <system_error>
+
+namespace multislit::apps {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The same file as `path` would be, whether it exists or not.
+fs::path resolved(const fs::path& path) {
+  std::error_code error;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path), error);
+  return error ? fs::absolute(path).lexically_normal() : p;
+}
+
+}  // namespace
+
+OutputFile::OutputFile(fs::path path) : path_(std::move(path)) {
+  const fs::path folder = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
+  temporary_ = folder / ("." + path_.filename().string() + ".part-" + std::to_string(::getpid()));
+  out_.open(temporary_, std::ios::binary | std::ios::trunc);
+  if (!out_)
+    throw std::runtime_error("cannot write " + path_.string() + " (in " + folder.string() + ")");
+}
+
+OutputFile::~OutputFile() {
+  if (committed_) return;
+  out_.close();
+  std::error_code ignored;
+  fs::remove(temporary_, ignored);
+}
+
+void OutputFile::commit() {
+  if (committed_) return;
+  if (out_.is_open()) {
+    out_.flush();
+    const bool written = static_cast<bool>(out_);
+    out_.close();
+    if (!written || out_.fail())
+      throw std::runtime_error("could not write all of " + path_.string() + " (disk full?)");
+  }
+  std::error_code error;
+  if (!fs::exists(temporary_, error)) throw std::runtime_error("could not write " + path_.string());
+  fs::rename(temporary_, path_, error);
+  if (error) throw std::runtime_error("could not write " + path_.string() + ": " + error.message());
+  committed_ = true;
+}
+
+void refuseOverwritingInputs(const fs::path& output, const std::vector<std::string>& inputs) {
+  const fs::path out = resolved(output);
+  for (const std::string& input : inputs)
+    if (!input.empty() && resolved(input) == out)
+      throw std::runtime_error("the output " + output.string() + " is the input " + input +
+                               ": writing it would destroy the input; choose another --out");
+}
+
+void refuseSameOutputTwice(const std::vector<fs::path>& outputs,
+                           const std::vector<std::string>& sources) {
+  std::map<fs::path, std::size_t> seen;
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    const auto [at, fresh] = seen.emplace(resolved(outputs[k]), k);
+    if (!fresh)
+      throw std::runtime_error(sources[at->second] + " and " + sources[k] +
+                               " would both be written to " + outputs[k].string() +
+                               ": give inputs of different names, or one at a time");
+  }
+}
+
+}  // namespace multislit::apps

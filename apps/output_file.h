@@ -1,0 +1,47 @@
+// Outputs of the commands, complete or absent: each is written to a temporary file beside it,
+// flushed and checked, then renamed over the name asked for; an output that would overwrite an
+// input, or two outputs of one name, are refused before anything is written.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace multislit::apps {
+
+/// A file written whole or not at all. Write to stream(); commit() makes it appear under its
+/// name (throws std::runtime_error naming it when the disk is full or it cannot be written);
+/// destroyed without commit() (an error, Ctrl-C between frames), the temporary file goes.
+class OutputFile {
+ public:
+  explicit OutputFile(std::filesystem::path path);
+  ~OutputFile();
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+
+  std::ofstream& stream() { return out_; }
+  /// The temporary file, for writers that take a path (cv::imwrite, OctoMap, PCL).
+  const std::filesystem::path& temporaryPath() const { return temporary_; }
+  const std::filesystem::path& path() const { return path_; }
+  /// Flushes, checks, closes and renames; for writers that wrote temporaryPath() themselves,
+  /// only checks that it exists and renames.
+  void commit();
+
+ private:
+  std::filesystem::path path_, temporary_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+/// Throws std::runtime_error when `output` names the same file as one of `inputs` (after
+/// resolving links and relative paths): writing it would destroy that input.
+void refuseOverwritingInputs(const std::filesystem::path& output,
+                             const std::vector<std::string>& inputs);
+
+/// Throws std::runtime_error when two of `outputs` are the same file (the second would silently
+/// replace the first), naming both inputs they come from (`sources`, parallel to `outputs`).
+void refuseSameOutputTwice(const std::vector<std::filesystem::path>& outputs,
+                           const std::vector<std::string>& sources);
+
+}  // namespace multislit::apps
