@@ -1,164 +1,37 @@
 // multislit bench: the time of every stage of the pipeline on one core, against the stock PCL
 // path on the same frames (issue 7), with the agreement of the two paths' detections.
+#include "bench_input.h"
+#include "bench_run.h"
+#include "bench_stock.h"
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
-#include "multislit/obstacles.h"
-#include "multislit/occupancy_map.h"
 #include "multislit/pipeline.h"
-#include "multislit/sim/scenarios.h"
-#include "multislit/sim/simulator.h"
 
-#include <octomap/OcTree.h>
-#include <pcl/ModelCoefficients.h>
-#include <pcl/point_types.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/search/kdtree.h>
-#include <pcl/segmentation/extract_clusters.h>
-#include <pcl/segmentation/sac_segmentation.h>
 #include <opencv2/core/utility.hpp>
 
 #include <sched.h>
 #include <sys/resource.h>
-#include <time.h>
 
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace multislit::apps {
 namespace {
 
-// ---- what is measured ---------------------------------------------------------------------------
-
-/// The frames of one run and what the stages need besides the images.
-struct BenchInput {
-  std::string label;  ///< scenario or folder
-  int scale = 1;      ///< points per frame, times the paper's sensor
-  Reference reference;
-  SensorConfig sensor;  ///< the sensor and its mount on the robot
-  std::vector<cv::Mat> images;
-  std::vector<Eigen::Isometry3d> world_from_camera;  ///< per frame: odometry and mount
-  Eigen::Isometry3d robot_from_camera = Eigen::Isometry3d::Identity();
-  Eigen::Vector3d light_origin = Eigen::Vector3d::Zero();  ///< projector centre, camera frame
-};
-
-/// The paper's sensor with `scale` times its points: 2x the slits over the same fan (scale 2),
-/// and also 2x the pixels over the same field of view (scale 4: twice the rows per slit).
-SensorConfig scaledSensor(int scale) {
-  SensorConfig s;
-  if (scale >= 2) {
-    s.projector.slit_count *= 2;
-    s.projector.slit_spacing /= 2;
-  }
-  if (scale >= 4) {
-    s.camera.width *= 2;
-    s.camera.height *= 2;
-    s.camera.pixel_size /= 2;
-  }
-  s.validate();
-  return s;
-}
-
-/// Renders the reference and `frames` frames of a scenario once (the simulator is slow: about
-/// 0.3 s per frame); every pass of the benchmark reuses them.
-BenchInput simulated(const std::string& scenario, long frames, double step, int scale) {
-  BenchInput in;
-  in.scale = scale;
-  const SensorConfig sensor = scaledSensor(scale);
-  const Simulator sim(sensor);
-  Scenario s = makeScenario(scenario);
-  if (step >= 0) s.step = step;
-  in.label = s.name;
-  ReferenceConfig rc;
-  rc.expected_slits = sensor.projector.slit_count;
-  const Scene floor = makeScenario("reference").scene;
-  in.reference = Reference::fromImage(sim.renderReference(floor, s.reference_mount).image, rc);
-  in.reference.setNominalScale(sensor, s.reference_mount);
-  in.robot_from_camera = sim.geometry().robotFromCamera(s.mount);
-  in.light_origin = sim.geometry().projectorCentre();
-  in.sensor = sensor;
-  in.sensor.mount = s.mount;
-  cli::Progress progress(static_cast<std::size_t>(frames),
-                         "render x" + std::to_string(scale) + " " + s.name);
-  for (long k = 0; k < frames; ++k) {
-    const auto frame = static_cast<std::uint64_t>(k);
-    in.world_from_camera.push_back(s.worldFromRobot(frame) * in.robot_from_camera);
-    in.images.push_back(sim.render(s.scene, in.world_from_camera.back(), frame).image);
-    progress.update(static_cast<std::size_t>(k + 1));
-  }
-  progress.finish();
-  return in;
-}
-
-/// robot_x of each frame from the frames.csv `multislit simulate` writes; 0 without it.
-std::vector<double> robotPositions(const std::filesystem::path& dir, std::size_t frames) {
-  std::vector<double> x(frames, 0.0);
-  std::ifstream csv(dir / "frames.csv");
-  std::string line;
-  std::getline(csv, line);  // header: frame,file,stamp_us,robot_x,...
-  for (std::size_t k = 0; k < frames && std::getline(csv, line); ++k) {
-    std::stringstream fields(line);
-    std::string field;
-    for (int column = 0; column < 4 && std::getline(fields, field, ','); ++column)
-      if (column == 3) x[k] = std::stod(field);
-  }
-  return x;
-}
-
-/// The PNGs of a folder (reference.png left out), in name order, with the reference of the
-/// reference options; the robot stands at the mount of --sensor, advanced along x as frames.csv
-/// says when the folder has one.
-BenchInput recorded(const cli::ArgParser& args) {
-  BenchInput in;
-  const std::filesystem::path dir = args.str("sequence");
-  in.label = dir.filename().string();
-  in.reference = referenceFromArgs(args);
-  if (!in.reference.scale.valid())
-    throw std::runtime_error("the reference has no metric scale: the stock path needs x, y, z");
-  std::vector<std::string> files;
-  for (const auto& entry : std::filesystem::directory_iterator(dir))
-    if (entry.path().extension() == ".png" && entry.path().filename() != "reference.png")
-      files.push_back(entry.path().string());
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw std::runtime_error("no PNG frames in '" + dir.string() + "'");
-  const SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  const SensorGeometry geometry(sensor);
-  in.robot_from_camera = geometry.robotFromCamera(sensor.mount);
-  in.light_origin = geometry.projectorCentre();
-  in.sensor = sensor;
-  const std::vector<double> x = robotPositions(dir, files.size());
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    in.images.push_back(readMonoImage(files[k]));
-    Eigen::Isometry3d world_from_robot = Eigen::Isometry3d::Identity();
-    world_from_robot.translation().x() = x[k];
-    in.world_from_camera.push_back(world_from_robot * in.robot_from_camera);
-  }
-  return in;
-}
-
 // ---- time and memory ----------------------------------------------------------------------------
-
-/// CPU time of the calling thread [s]: every stage runs on this thread (PCL's RANSAC and
-/// OctoMap run serially here), and CPU time leaves out the time other processes take the core.
-double threadSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 double peakRssMb() {
   rusage usage{};
@@ -178,74 +51,7 @@ int pinToOneCore(int cpu) {
   return cpu;
 }
 
-/// The times of one stage: per frame, one sample per pass [s].
-class StageTimes {
- public:
-  explicit StageTimes(std::size_t frames = 0) : samples_(frames) {}
-  void add(std::size_t frame, double seconds) { samples_[frame].push_back(seconds); }
-  bool empty() const { return samples_.empty() || samples_[0].empty(); }
-
-  /// The q-quantile over frames (nearest rank) of each frame's median over the passes: the
-  /// spread between frames is the pipeline's, while the median of a frame's passes drops the
-  /// cache misses other engineers' builds cause on the shared cores [s].
-  double quantile(double q) const {
-    std::vector<double> medians = frameMedians();
-    if (medians.empty()) return std::nan("");
-    std::sort(medians.begin(), medians.end());
-    const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(medians.size())));
-    return medians[std::min(medians.size() - 1, rank > 0 ? rank - 1 : 0)];
-  }
-  /// The mean of the frames' medians [s].
-  double mean() const {
-    const std::vector<double> medians = frameMedians();
-    double sum = 0;
-    for (const double m : medians) sum += m;
-    return medians.empty() ? std::nan("") : sum / static_cast<double>(medians.size());
-  }
-  /// Stages run one after the other: per frame, the sum of their medians. Empty when one is.
-  static StageTimes sumOf(const std::vector<const StageTimes*>& stages) {
-    StageTimes out(stages.front()->samples_.size());
-    for (const StageTimes* stage : stages)
-      if (stage->empty()) return StageTimes();
-    for (const StageTimes* stage : stages) {
-      const std::vector<double> medians = stage->frameMedians();
-      for (std::size_t k = 0; k < medians.size(); ++k) {
-        if (out.samples_[k].empty()) out.samples_[k].push_back(0.0);
-        out.samples_[k][0] += medians[k];
-      }
-    }
-    return out;
-  }
-
- private:
-  std::vector<double> frameMedians() const {
-    std::vector<double> out;
-    for (std::vector<double> s : samples_) {
-      if (s.empty()) continue;
-      std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
-      out.push_back(s[s.size() / 2]);
-    }
-    return out;
-  }
-  std::vector<std::vector<double>> samples_;
-};
-
 // ---- the two paths ------------------------------------------------------------------------------
-
-/// What a path detected in one frame, for the agreement of the two paths.
-struct Detection {
-  bool found = false;                ///< a floor was found
-  std::vector<int> obstacle_points;  ///< cloud indices off the floor (points with x, y, z), sorted
-  std::size_t clusters = 0;          ///< obstacle groups of at least 3 points
-};
-
-/// Stage times of a path over every pass, and what it detected in the first pass.
-struct PathRun {
-  StageTimes extract, floor, clusters, map;
-  StageTimes walker;  ///< footsteps and decision (ours only)
-  std::vector<Detection> detections;
-  double valid_points = 0;  ///< per frame, mean
-};
 
 /// Our pipeline as a walking robot runs it: extraction, then multislit::Pipeline (floor fit and
 /// classification, obstacle clusters, map update, footsteps and decision), each stage timed.
@@ -280,112 +86,6 @@ PathRun runOurs(const BenchInput& in, int passes) {
         if (hasXYZ((*cloud)[static_cast<std::size_t>(i)])) d.obstacle_points.push_back(i);
       std::sort(d.obstacle_points.begin(), d.obstacle_points.end());
       d.clusters = r.obstacles.obstacles.size();
-    }
-  }
-  return run;
-}
-
-/// The stock PCL objects of one frame, made once and reused like ours.
-struct StockPath {
-  explicit StockPath(double threshold) {
-    segmentation.setModelType(pcl::SACMODEL_PLANE);
-    segmentation.setMethodType(pcl::SAC_RANSAC);
-    segmentation.setDistanceThreshold(threshold);
-    segmentation.setMaxIterations(FloorDetectorConfig{}.iterations());
-    segmentation.setProbability(FloorDetectorConfig{}.probability);
-    segmentation.setOptimizeCoefficients(true);  // PCL's default, like our eq. (2) refit
-    clustering.setClusterTolerance(0.02);        // [m]: the points of a slit are 1-3 mm apart
-    clustering.setMinClusterSize(3);             // as ObstacleClustererConfig::min_points
-    clustering.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
-  }
-  pcl::SACSegmentation<pcl::PointXYZ> segmentation;
-  pcl::EuclideanClusterExtraction<pcl::PointXYZ> clustering;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr xyz = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  pcl::PointCloud<pcl::PointXYZ>::Ptr off = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  std::vector<int> source, off_source;  ///< cloud index of each point of xyz and off
-};
-
-/// The floor of the metric cloud: SACSegmentation (SACMODEL_PLANE) on x, y, z of the valid
-/// points, then every point off the plane is an obstacle. Same fail-safe rule as ours.
-bool stockFloor(const pcl::PointCloud<PointRDM>& cloud, StockPath& s) {
-  s.xyz->clear();
-  s.source.clear();
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const PointRDM& p = cloud[i];
-    if (!hasXYZ(p)) continue;
-    s.xyz->push_back(pcl::PointXYZ(p.x, p.y, p.z));
-    s.source.push_back(static_cast<int>(i));
-  }
-  pcl::PointIndices inliers;
-  pcl::ModelCoefficients plane;
-  s.off->clear();
-  s.off_source.clear();
-  const FloorDetectorConfig config;
-  if (s.xyz->size() < static_cast<std::size_t>(config.min_points)) return false;
-  s.segmentation.setInputCloud(s.xyz);
-  s.segmentation.segment(inliers, plane);
-  std::size_t next = 0;  // the inliers come sorted
-  for (std::size_t j = 0; j < s.xyz->size(); ++j) {
-    if (next < inliers.indices.size() && inliers.indices[next] == static_cast<int>(j)) {
-      ++next;
-      continue;
-    }
-    s.off->push_back((*s.xyz)[j]);
-    s.off_source.push_back(s.source[j]);
-  }
-  return static_cast<double>(inliers.indices.size()) >=
-         std::max(3.0, config.min_inlier_ratio * static_cast<double>(s.xyz->size()));
-}
-
-/// Every valid point of the metric cloud into the map, world frame, with its ray from the camera:
-/// OcTree::insertPointCloud, OctoMap's way to map a range sensor's cloud.
-void stockMap(const StockPath& s, const Eigen::Isometry3d& world_from_camera,
-              octomap::OcTree& tree) {
-  octomap::Pointcloud scan;
-  scan.reserve(s.xyz->size());
-  for (const pcl::PointXYZ& p : *s.xyz) {
-    const Eigen::Vector3d w = world_from_camera * Eigen::Vector3d(p.x, p.y, p.z);
-    scan.push_back(static_cast<float>(w.x()), static_cast<float>(w.y()), static_cast<float>(w.z()));
-  }
-  const Eigen::Vector3d origin = world_from_camera.translation();
-  tree.insertPointCloud(
-      scan, octomap::point3d(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
-                             static_cast<float>(origin.z())));
-}
-
-/// The stock PCL path on the RDMaps of our extractor (PCL has no slit extractor): metric cloud,
-/// SACSegmentation, EuclideanClusterExtraction on a KdTree, OcTree::insertPointCloud.
-PathRun runStock(const BenchInput& in, int passes, double threshold) {
-  const std::size_t n = in.images.size();
-  PathRun run{StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(n), StageTimes(0), {}, 0};
-  run.detections.resize(n);
-  const Extractor extractor(in.reference);
-  StockPath stock(threshold);
-  std::vector<pcl::PointCloud<PointRDM>> clouds(n);  // extraction is ours: timed there
-  for (std::size_t k = 0; k < n; ++k) extractor.extract(in.images[k], clouds[k]);
-  for (int pass = -1; pass < passes; ++pass) {
-    octomap::OcTree tree(0.01);  // the resolution of OccupancyMapConfig [m]
-    for (std::size_t k = 0; k < n; ++k) {
-      const double t0 = threadSeconds();
-      const bool found = stockFloor(clouds[k], stock);
-      const double t1 = threadSeconds();
-      std::vector<pcl::PointIndices> groups;
-      if (found && !stock.off->empty()) {
-        stock.clustering.setInputCloud(stock.off);
-        stock.clustering.extract(groups);
-      }
-      const double t2 = threadSeconds();
-      if (found) stockMap(stock, in.world_from_camera[k], tree);
-      const double t3 = threadSeconds();
-      if (pass < 0) continue;
-      run.floor.add(k, t1 - t0);
-      run.clusters.add(k, t2 - t1);
-      run.map.add(k, t3 - t2);
-      if (pass > 0) continue;
-      Detection& d = run.detections[k];
-      d.found = found;
-      if (found) d.obstacle_points = stock.off_source;
-      d.clusters = groups.size();
     }
   }
   return run;
@@ -556,7 +256,7 @@ ScaleResult measure(const BenchInput& in, int passes, double tolerance) {
   r.ours = runOurs(in, passes);
   r.points = r.ours.valid_points;
   r.threshold = metricThreshold(in.reference, FloorDetectorConfig{}.threshold());
-  r.stock = runStock(in, std::max(1, passes / 4), r.threshold.median);
+  r.stock = runStockPath(in, std::max(1, passes / 4), r.threshold.median);
   r.agreement = compare(r.ours.detections, r.stock.detections, tolerance);
   return r;
 }
@@ -603,9 +303,10 @@ int runBench(int argc, char** argv) {
 
   std::vector<BenchInput> inputs;
   for (const int scale : scales)
-    inputs.push_back(args.has("sequence") ? recorded(args)
-                                          : simulated(args.str("scenario"), args.integer("frames"),
-                                                      args.number("step"), scale));
+    inputs.push_back(args.has("sequence")
+                         ? readBenchInput(args)
+                         : renderBenchInput(args.str("scenario"), args.integer("frames"),
+                                            args.number("step"), scale));
   const double rss_before = peakRssMb();
   const int cpu = pinToOneCore(static_cast<int>(args.integer("cpu")));
   std::vector<ScaleResult> results;

@@ -6,9 +6,66 @@
 #include "multislit/reference.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <string>
+#include <vector>
 
 namespace multislit::apps {
+namespace {
+
+// --region-width, --estimator, --min-contrast and --slits.
+ReferenceConfig referenceConfigFromArgs(const cli::ArgParser& args) {
+  ReferenceConfig rc;
+  rc.region_width = static_cast<int>(args.integer("region-width"));
+  rc.estimator = parseEstimator(args.str("estimator"));
+  rc.min_contrast = args.number("min-contrast");
+  rc.expected_slits = static_cast<int>(args.integer("slits"));
+  return rc;
+}
+
+// The images of a plane at known depths, in the order given.
+struct PlaneImages {
+  std::vector<cv::Mat> images;
+  std::vector<double> depths;  ///< [m]
+};
+
+// Each --plane DEPTH:IMAGE; a malformed one is a usage error.
+PlaneImages readPlanes(const std::vector<std::string>& planes) {
+  PlaneImages out;
+  for (const std::string& p : planes) {
+    const std::size_t colon = p.find(':');
+    if (colon == std::string::npos)
+      throw cli::UsageError("--plane takes DEPTH:IMAGE, not '" + p + "'");
+    char* end = nullptr;
+    const std::string depth = p.substr(0, colon);
+    out.depths.push_back(std::strtod(depth.c_str(), &end));
+    if (depth.empty() || *end != '\0' || !(out.depths.back() > 0))
+      throw cli::UsageError("--plane depth must be a positive number of metres, not '" + depth +
+                            "'");
+    out.images.push_back(readMonoImage(p.substr(colon + 1)));
+  }
+  return out;
+}
+
+// The reference's slits, regions and scale, with the fit's rms over `planes` plane images.
+void printCalibration(const Reference& ref, const std::string& ref_path, std::size_t planes,
+                      double fit_rms) {
+  std::printf("reference %s: %zu slits, %zu points (%.0f per slit)\n", ref_path.c_str(),
+              ref.slits.size(), ref.pointCount(),
+              static_cast<double>(ref.pointCount()) / static_cast<double>(ref.slits.size()));
+  std::printf("  assigned region %d px (widest without overlap %d px), slit profile %.1f px wide\n",
+              ref.region_width, ref.max_region_width, ref.profile_width);
+  std::printf(
+      "  slit smoothing rms %.3f px; %d slit pieces joined across gaps, %d tracks dropped "
+      "as not slits (speckle, texture)\n",
+      ref.smoothing_rms, ref.joined_pieces, ref.dropped_tracks);
+  std::printf("  metric scale (%s): f * baseline = %.4f px m", ref.scale.source.c_str(),
+              ref.scale.disparity_constant);
+  if (planes > 0) std::printf(", fit rms %.3f px over %zu planes", fit_rms, planes);
+}
+
+}  // namespace
 
 int runCalibrate(int argc, char** argv) {
   cli::ArgParser args(
@@ -39,11 +96,7 @@ int runCalibrate(int argc, char** argv) {
 
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  ReferenceConfig rc;
-  rc.region_width = static_cast<int>(args.integer("region-width"));
-  rc.estimator = parseEstimator(args.str("estimator"));
-  rc.min_contrast = args.number("min-contrast");
-  rc.expected_slits = static_cast<int>(args.integer("slits"));
+  const ReferenceConfig rc = referenceConfigFromArgs(args);
   std::vector<cv::Mat> ref_images;
   for (const std::string& path : ref_paths) ref_images.push_back(readMonoImage(path));
   const std::string ref_path =
@@ -61,36 +114,12 @@ int runCalibrate(int argc, char** argv) {
   const std::vector<std::string> planes = args.list("plane");
   double fit_rms = 0;
   if (!planes.empty()) {
-    std::vector<cv::Mat> images;
-    std::vector<double> depths;
-    for (const std::string& p : planes) {
-      const std::size_t colon = p.find(':');
-      if (colon == std::string::npos)
-        throw cli::UsageError("--plane takes DEPTH:IMAGE, not '" + p + "'");
-      char* end = nullptr;
-      const std::string depth = p.substr(0, colon);
-      depths.push_back(std::strtod(depth.c_str(), &end));
-      if (depth.empty() || *end != '\0' || !(depths.back() > 0))
-        throw cli::UsageError("--plane depth must be a positive number of metres, not '" + depth +
-                              "'");
-      images.push_back(readMonoImage(p.substr(colon + 1)));
-    }
-    fit_rms = ref.calibrateWithPlanes(images, depths, sensor.camera, rc);
+    const PlaneImages plane_images = readPlanes(planes);
+    fit_rms = ref.calibrateWithPlanes(plane_images.images, plane_images.depths, sensor.camera, rc);
   }
   ref.save(args.str("out"));
 
-  std::printf("reference %s: %zu slits, %zu points (%.0f per slit)\n", ref_path.c_str(),
-              ref.slits.size(), ref.pointCount(),
-              static_cast<double>(ref.pointCount()) / static_cast<double>(ref.slits.size()));
-  std::printf("  assigned region %d px (widest without overlap %d px), slit profile %.1f px wide\n",
-              ref.region_width, ref.max_region_width, ref.profile_width);
-  std::printf(
-      "  slit smoothing rms %.3f px; %d slit pieces joined across gaps, %d tracks dropped "
-      "as not slits (speckle, texture)\n",
-      ref.smoothing_rms, ref.joined_pieces, ref.dropped_tracks);
-  std::printf("  metric scale (%s): f * baseline = %.4f px m", ref.scale.source.c_str(),
-              ref.scale.disparity_constant);
-  if (!planes.empty()) std::printf(", fit rms %.3f px over %zu planes", fit_rms, planes.size());
+  printCalibration(ref, ref_path, planes.size(), fit_rms);
   std::printf("\nwrote %s\n", args.str("out").c_str());
   return 0;
 }

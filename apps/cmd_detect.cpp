@@ -106,24 +106,23 @@ FloorDetectorConfig detectorConfig(const cli::ArgParser& args) {
   return fc;
 }
 
-}  // namespace
+// --help: what detect measures and the fields of its JSON lines.
+constexpr const char* kSummary =
+    "Finds the floor in each frame's RDMap with RANSAC (eq. 1-3) and the points off it\n"
+    "(Sec. III-B). The threshold is 3 sigma, sigma measured in each frame's own floor residuals\n"
+    "(1.4826 x their median |residual|, clamped to [--min-sigma, --max-sigma]); off-plane "
+    "points\n"
+    "are grouped along slits and across adjacent slits, and groups of fewer than 3 points are\n"
+    "noise. Writes one JSON object per frame and line: frame, points, found, plane [A, B, C] of\n"
+    "dk = A u + B v + C, inliers, residual_std [px], sigma_px (the sigma used),\n"
+    "sigma_estimate_px (before clamping), threshold_px, off_plane_count (every point off the\n"
+    "plane), obstacle_count (points listed in obstacle_points), rejected_groups, stamp_us,\n"
+    "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max}, "
+    "...] (px) and\n"
+    "obstacle_points [[u, v, dk], ...] (reference position and disparity, px): the points of\n"
+    "the groups, or with --raw every point off the plane. null: not found or not measured.";
 
-int runDetect(int argc, char** argv) {
-  cli::ArgParser args(
-      "detect",
-      "Finds the floor in each frame's RDMap with RANSAC (eq. 1-3) and the points off it\n"
-      "(Sec. III-B). The threshold is 3 sigma, sigma measured in each frame's own floor residuals\n"
-      "(1.4826 x their median |residual|, clamped to [--min-sigma, --max-sigma]); off-plane "
-      "points\n"
-      "are grouped along slits and across adjacent slits, and groups of fewer than 3 points are\n"
-      "noise. Writes one JSON object per frame and line: frame, points, found, plane [A, B, C] of\n"
-      "dk = A u + B v + C, inliers, residual_std [px], sigma_px (the sigma used),\n"
-      "sigma_estimate_px (before clamping), threshold_px, off_plane_count (every point off the\n"
-      "plane), obstacle_count (points listed in obstacle_points), rejected_groups, stamp_us,\n"
-      "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max}, "
-      "...] (px) and\n"
-      "obstacle_points [[u, v, dk], ...] (reference position and disparity, px): the points of\n"
-      "the groups, or with --raw every point off the plane. null: not found or not measured.");
+void addDetectOptions(cli::ArgParser& args) {
   addReferenceOptions(args);
   args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
   args.option("sigma", "0.3", "sensor noise sigma [px]: RANSAC's threshold is 3 sigma");
@@ -135,6 +134,13 @@ int runDetect(int argc, char** argv) {
   args.flag("raw", "obstacle_points: every point off the plane, also groups below 3 points");
   args.option("out", "", "JSONL file to write (required)");
   args.positionals("FRAME...", "8- or 16-bit images", 1);
+}
+
+}  // namespace
+
+int runDetect(int argc, char** argv) {
+  cli::ArgParser args("detect", kSummary);
+  addDetectOptions(args);
   if (!args.parse(argc, argv)) return 0;
   if (!args.has("out")) throw cli::UsageError("--out is required");
 

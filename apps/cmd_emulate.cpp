@@ -9,13 +9,69 @@
 #include <chrono>
 #include <csignal>
 #include <iostream>
+#include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace multislit::apps {
 namespace {
 
 volatile std::sig_atomic_t g_interrupted = 0;
 void onSignal(int) { g_interrupted = 1; }
+
+// --serial, --fps and --loss; a value out of range is a usage error.
+EmulatorConfig emulatorConfigFromArgs(const cli::ArgParser& args) {
+  EmulatorConfig config;
+  config.serial = args.str("serial");
+  config.fps = args.number("fps");
+  config.lost_packet_ratio = args.number("loss");
+  try {
+    config.validate();
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(e.what());
+  }
+  return config;
+}
+
+// The first `frames` frames of the scenario's walk, rendered once (rendering is far slower than
+// serving).
+std::vector<cv::Mat> renderWalk(const Simulator& sim, const Scenario& scenario, long frames) {
+  std::vector<cv::Mat> images;
+  cli::Progress progress(static_cast<std::size_t>(frames), "render");
+  for (long k = 0; k < frames; ++k) {
+    const auto frame = static_cast<uint64_t>(k);
+    const Eigen::Isometry3d world_from_camera =
+        scenario.worldFromRobot(frame) * sim.geometry().robotFromCamera(scenario.mount);
+    images.push_back(sim.render(scenario.scene, world_from_camera, frame).image);
+    progress.update(static_cast<std::size_t>(k + 1));
+  }
+  progress.finish();
+  return images;
+}
+
+// Serves until interrupted or, when `seconds` > 0, for `seconds` from `start`; reports the frames
+// served every 5 s.
+void serve(const CameraEmulator& camera, std::chrono::steady_clock::time_point start,
+           double seconds) {
+  auto report = start;
+  std::uint64_t reported = 0;
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto now = std::chrono::steady_clock::now();
+    if (g_interrupted || (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)))
+      break;
+    if (now - report >= std::chrono::seconds(5)) {
+      const std::uint64_t served = camera.framesServed();
+      std::cout << "served " << served << " frames ("
+                << static_cast<double>(served - reported) /
+                       std::chrono::duration<double>(now - report).count()
+                << " fps)\n"
+                << std::flush;
+      report = now;
+      reported = served;
+    }
+  }
+}
 
 }  // namespace
 
@@ -43,17 +99,8 @@ int runEmulate(int argc, char** argv) {
   const double seconds = args.number("seconds");
   if (frames < 1) throw cli::UsageError("--frames must be >= 1");
   if (!(seconds >= 0)) throw cli::UsageError("--seconds must be >= 0");
-  EmulatorConfig config;
-  config.serial = args.str("serial");
-  config.fps = args.number("fps");
-  config.lost_packet_ratio = args.number("loss");
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw cli::UsageError(e.what());
-  }
+  const EmulatorConfig config = emulatorConfigFromArgs(args);
 
-  // The walk, rendered once (rendering is far slower than serving).
   const Scenario scenario = makeScenario(args.str("scenario"));
   RenderConfig render;
   render.seed = static_cast<uint64_t>(args.integer("seed"));
@@ -61,16 +108,7 @@ int runEmulate(int argc, char** argv) {
   render.noise = !args.has("no-noise");
   const Simulator sim(args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{},
                       render);
-  std::vector<cv::Mat> images;
-  cli::Progress progress(static_cast<std::size_t>(frames), "render");
-  for (long k = 0; k < frames; ++k) {
-    const auto frame = static_cast<uint64_t>(k);
-    const Eigen::Isometry3d world_from_camera =
-        scenario.worldFromRobot(frame) * sim.geometry().robotFromCamera(scenario.mount);
-    images.push_back(sim.render(scenario.scene, world_from_camera, frame).image);
-    progress.update(static_cast<std::size_t>(k + 1));
-  }
-  progress.finish();
+  const std::vector<cv::Mat> images = renderWalk(sim, scenario, frames);
 
   CameraEmulator camera(images, config);
   g_interrupted = 0;
@@ -86,24 +124,7 @@ int runEmulate(int argc, char** argv) {
     std::cout << "Ctrl-C stops\n" << std::flush;
 
   const auto start = std::chrono::steady_clock::now();
-  auto report = start;
-  std::uint64_t reported = 0;
-  for (;;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    const auto now = std::chrono::steady_clock::now();
-    if (g_interrupted || (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)))
-      break;
-    if (now - report >= std::chrono::seconds(5)) {
-      const std::uint64_t served = camera.framesServed();
-      std::cout << "served " << served << " frames ("
-                << static_cast<double>(served - reported) /
-                       std::chrono::duration<double>(now - report).count()
-                << " fps)\n"
-                << std::flush;
-      report = now;
-      reported = served;
-    }
-  }
+  serve(camera, start, seconds);
   std::signal(SIGINT, previous_int);
   std::signal(SIGTERM, previous_term);
   std::cout << "served " << camera.framesServed() << " frames in "

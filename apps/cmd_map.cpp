@@ -168,6 +168,55 @@ void reportMiss(const Frame& frame, PoseMiss miss, std::size_t& misses) {
               << "summary.txt\n";
 }
 
+/// What the run over the frames measured.
+struct FrameCounts {
+  std::size_t processed = 0;              ///< frames through the whole chain
+  std::size_t misses = 0;                 ///< frames without a pose, skipped
+  std::size_t bad_frames = 0;             ///< frames the extractor refused
+  StampSource clock = StampSource::Host;  ///< the stamps' clock, of the last frame measured
+};
+
+/// Every frame of `source` through the chain, until the source ends, Ctrl-C or `max_frames`
+/// (0: no limit); `t0` the run's start, for the status line. Starts the source.
+FrameCounts processFrames(FrameSource& source, const Extractor& extractor, Poses& poses,
+                          Pipeline& pipeline, MapRecorder& recorder, long max_frames,
+                          std::chrono::steady_clock::time_point t0) {
+  FrameCounts n;
+  source.start();
+  while (!g_stop && (max_frames == 0 || static_cast<long>(n.processed) < max_frames)) {
+    const std::optional<Frame> frame = source.next(std::chrono::milliseconds(200));
+    if (!frame) {
+      if (source.finished()) break;
+      continue;
+    }
+    PoseMiss miss;
+    std::optional<PipelineInput> input = poses.at(*frame, miss);
+    if (!input) {
+      reportMiss(*frame, miss, n.misses);
+      recorder.skip();
+      continue;
+    }
+    const double extract_start = threadCpuSeconds();
+    try {
+      input->cloud =
+          extractor.extract(frame->image, frame->stamp_us, static_cast<std::uint32_t>(frame->seq));
+    } catch (const std::exception& e) {  // a frame of another size or kind: said, counted
+      if (n.bad_frames++ == 0) std::cerr << "frame " << frame->seq << ": " << e.what() << "\n";
+      continue;
+    }
+    const double extract_seconds = threadCpuSeconds() - extract_start;
+    n.clock = frame->stamp_source;
+    const PipelineResult r = pipeline.process(*input);
+    poses.follow(r.walker);
+    recorder.record(frame->seq, frame->stamp_us, extract_seconds, *input->cloud, r, pipeline.map());
+    ++n.processed;
+    status(n.processed,
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), r,
+           pipeline.map().occupiedCount());
+  }
+  return n;
+}
+
 }  // namespace
 
 int runMap(int argc, char** argv) {
@@ -196,52 +245,23 @@ int runMap(int argc, char** argv) {
   auto previous_int = std::signal(SIGINT, onStopSignal);
   auto previous_term = std::signal(SIGTERM, onStopSignal);
   const auto t0 = std::chrono::steady_clock::now();
-  std::size_t processed = 0, misses = 0, bad_frames = 0;
-  StampSource clock = StampSource::Host;
-  in.source->start();
-  while (!g_stop && (max_frames == 0 || static_cast<long>(processed) < max_frames)) {
-    const std::optional<Frame> frame = in.source->next(std::chrono::milliseconds(200));
-    if (!frame) {
-      if (in.source->finished()) break;
-      continue;
-    }
-    PoseMiss miss;
-    std::optional<PipelineInput> input = poses.at(*frame, miss);
-    if (!input) {
-      reportMiss(*frame, miss, misses);
-      recorder.skip();
-      continue;
-    }
-    const double extract_start = threadCpuSeconds();
-    try {
-      input->cloud =
-          extractor.extract(frame->image, frame->stamp_us, static_cast<std::uint32_t>(frame->seq));
-    } catch (const std::exception& e) {  // a frame of another size or kind: said, counted
-      if (bad_frames++ == 0) std::cerr << "frame " << frame->seq << ": " << e.what() << "\n";
-      continue;
-    }
-    const double extract_seconds = threadCpuSeconds() - extract_start;
-    clock = frame->stamp_source;
-    const PipelineResult r = pipeline.process(*input);
-    poses.follow(r.walker);
-    recorder.record(frame->seq, frame->stamp_us, extract_seconds, *input->cloud, r, pipeline.map());
-    ++processed;
-    status(processed, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
-           r, pipeline.map().occupiedCount());
-  }
+  const FrameCounts counts =
+      processFrames(*in.source, extractor, poses, pipeline, recorder, max_frames, t0);
   in.source->stop();
   std::signal(SIGINT, previous_int);
   std::signal(SIGTERM, previous_term);
   if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string stamps =
-      args.has("camera") ? std::string(stampSourceName(clock)) + " clock" : std::string("recorded");
-  const std::string heading = "multislit map: " + in.description + " (stamps: " + stamps +
-                              "), poses from " + poses.description() +
-                              (bad_frames ? ", " + std::to_string(bad_frames) + " bad frames" : "");
+  const std::string stamps = args.has("camera")
+                                 ? std::string(stampSourceName(counts.clock)) + " clock"
+                                 : std::string("recorded");
+  const std::string heading =
+      "multislit map: " + in.description + " (stamps: " + stamps + "), poses from " +
+      poses.description() +
+      (counts.bad_frames ? ", " + std::to_string(counts.bad_frames) + " bad frames" : "");
   std::cout << recorder.finish(pipeline, heading, seconds, g_stop);
-  if (processed == 0 && bad_frames > 0)
+  if (counts.processed == 0 && counts.bad_frames > 0)
     throw std::runtime_error("no frame could be measured with this calibration");
   return g_stop ? 130 : 0;
 }

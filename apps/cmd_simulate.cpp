@@ -46,17 +46,7 @@ Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
   return photometryPreset(choice);
 }
 
-}  // namespace
-
-int runSimulate(int argc, char** argv) {
-  cli::ArgParser args("simulate",
-                      "Renders the reference image (the bare floor at the reference pose) and a\n"
-                      "sequence of a scenario, each image with its ground truth (CSV: for every\n"
-                      "slit and row, the exact slit centre, 3D point, object and height).\n"
-                      "Scenarios: " +
-                          joined(scenarioNames()) +
-                          "\nPhotometries (--photometry): " + joined(photometryChoices(), 29) +
-                          "\nor the photometry.yaml of an earlier run");
+void addSimulateOptions(cli::ArgParser& args) {
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor, data/sensor.yaml)");
@@ -75,8 +65,10 @@ int runSimulate(int argc, char** argv) {
   args.option("out", "out/simulate", "output folder");
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("no-reference", "skip the reference image");
-  if (!args.parse(argc, argv)) return 0;
+}
 
+// --scenario or --wall-depth, with --scene and the pose's overrides.
+Scenario scenarioFromArgs(const cli::ArgParser& args) {
   Scenario scenario = args.has("wall-depth") ? makeWallScenario(args.number("wall-depth"))
                                              : makeScenario(args.str("scenario"));
   if (args.has("scene")) scenario.scene = Scene::load(args.str("scene"));
@@ -84,46 +76,30 @@ int runSimulate(int argc, char** argv) {
   if (args.has("roll")) scenario.mount.roll = args.number("roll");
   if (args.has("height")) scenario.mount.height = args.number("height");
   if (args.has("step")) scenario.step = args.number("step");
-  SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  const auto seed = args.has("seed") ? static_cast<uint64_t>(args.integer("seed")) : 1u;
-  // Photometry: floor and object surfaces into the scene, the rest into the render config.
-  // Without --photometry the scene (and a --scene file) keeps its own surfaces.
+  return scenario;
+}
+
+// The photometry as rendered: floor and object surfaces into `scene`, the rest (with --seed,
+// --bit-depth and --no-noise) into its render config. Without --photometry the scene (and a
+// --scene file) keeps its own surfaces.
+Photometry photometryFromArgs(const cli::ArgParser& args, uint64_t seed, Scene& scene) {
   Photometry photometry;
-  photometry.floor = scenario.scene.floor;
+  photometry.floor = scene.floor;
   if (args.has("photometry")) {
     photometry = choosePhotometry(args.str("photometry"), seed);
-    applyPhotometry(photometry, scenario.scene);
+    applyPhotometry(photometry, scene);
   }
-  RenderConfig render = photometry.render;
+  RenderConfig& render = photometry.render;
   if (args.has("seed") || !args.has("photometry")) render.seed = seed;
   if (args.has("bit-depth")) render.bit_depth = static_cast<int>(args.integer("bit-depth"));
   render.noise = render.noise && !args.has("no-noise");
-  const long frames = args.integer("frames");
-  const double fps = args.number("fps");
-  if (frames < 0) throw cli::UsageError("--frames must be >= 0");
-  if (!(fps > 0)) throw cli::UsageError("--fps must be > 0");
+  return photometry;
+}
 
-  const std::filesystem::path out = args.str("out");
-  std::filesystem::create_directories(out);
-  const Simulator sim(sensor, render);
-  SensorConfig used = sensor;
-  used.mount = scenario.mount;
-  used.save((out / "sensor.yaml").string());
-  scenario.scene.save((out / "scene.yaml").string());
-  Photometry used_photometry = photometry;
-  used_photometry.render = render;
-  savePhotometry(used_photometry, (out / "photometry.yaml").string());
-
-  const auto t0 = std::chrono::steady_clock::now();
-  if (!args.has("no-reference")) {
-    // The reference: the bare floor, seen from the reference pose (Sec. II-C, Fig. 8).
-    const Scene floor_only{scenario.scene.floor, {}};
-    const RenderedFrame ref = sim.renderReference(floor_only, scenario.reference_mount);
-    writeImage((out / "reference.png").string(), ref.image);
-    writeGroundTruthCsv((out / "reference.csv").string(), ref.truth, floor_only);
-  }
-
+// The sequence: frame_NNNNNN.png and .csv (ground truth) per frame, frames.csv (index and
+// poses) and odometry.csv in `out`. Returns the number of slit crossings in all frames.
+std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long frames, double fps,
+                          const std::filesystem::path& out) {
   std::ofstream index(out / "frames.csv");
   index << "frame,file,stamp_us,robot_x,camera_x,camera_y,camera_z,tilt,roll,height\n";
   const auto stamp0 = std::chrono::duration_cast<std::chrono::microseconds>(
@@ -153,6 +129,51 @@ int runSimulate(int argc, char** argv) {
   }
   progress.finish();
   if (!odometry.empty()) saveOdometry((out / "odometry.csv").string(), odometry);
+  return crossings;
+}
+
+}  // namespace
+
+int runSimulate(int argc, char** argv) {
+  cli::ArgParser args("simulate",
+                      "Renders the reference image (the bare floor at the reference pose) and a\n"
+                      "sequence of a scenario, each image with its ground truth (CSV: for every\n"
+                      "slit and row, the exact slit centre, 3D point, object and height).\n"
+                      "Scenarios: " +
+                          joined(scenarioNames()) +
+                          "\nPhotometries (--photometry): " + joined(photometryChoices(), 29) +
+                          "\nor the photometry.yaml of an earlier run");
+  addSimulateOptions(args);
+  if (!args.parse(argc, argv)) return 0;
+
+  Scenario scenario = scenarioFromArgs(args);
+  SensorConfig sensor =
+      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  const auto seed = args.has("seed") ? static_cast<uint64_t>(args.integer("seed")) : 1u;
+  const Photometry photometry = photometryFromArgs(args, seed, scenario.scene);
+  const long frames = args.integer("frames");
+  const double fps = args.number("fps");
+  if (frames < 0) throw cli::UsageError("--frames must be >= 0");
+  if (!(fps > 0)) throw cli::UsageError("--fps must be > 0");
+
+  const std::filesystem::path out = args.str("out");
+  std::filesystem::create_directories(out);
+  const Simulator sim(sensor, photometry.render);
+  SensorConfig used = sensor;
+  used.mount = scenario.mount;
+  used.save((out / "sensor.yaml").string());
+  scenario.scene.save((out / "scene.yaml").string());
+  savePhotometry(photometry, (out / "photometry.yaml").string());
+
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!args.has("no-reference")) {
+    // The reference: the bare floor, seen from the reference pose (Sec. II-C, Fig. 8).
+    const Scene floor_only{scenario.scene.floor, {}};
+    const RenderedFrame ref = sim.renderReference(floor_only, scenario.reference_mount);
+    writeImage((out / "reference.png").string(), ref.image);
+    writeGroundTruthCsv((out / "reference.csv").string(), ref.truth, floor_only);
+  }
+  const std::size_t crossings = writeSequence(sim, scenario, frames, fps, out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const long images = frames + (args.has("no-reference") ? 0 : 1);

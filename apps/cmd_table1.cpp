@@ -18,6 +18,60 @@
 
 namespace multislit::apps {
 
+namespace {
+
+// The residual std of eq. (2) fitted to all points of each RDMap, over `frames` frames of
+// `floor` seen from `mount` (condition `cond` of Table I: its own noise).
+struct FloorNoise {
+  double mean = 0;    ///< mean of the frames' residual std [px]
+  double spread = 0;  ///< std of the frames' residual std [px]
+  double points = 0;  ///< mean points per frame
+};
+
+FloorNoise measureFloorNoise(const Simulator& sim, const Extractor& extractor, const Scene& floor,
+                             const MountConfig& mount, int cond, long frames,
+                             cli::Progress& progress) {
+  const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(mount);
+  std::vector<double> stds;
+  double points = 0;
+  for (long k = 0; k < frames; ++k) {
+    const RenderedFrame f = sim.render(floor, pose, static_cast<uint64_t>(cond * 100000 + k));
+    pcl::PointCloud<PointRDM> cloud;
+    extractor.extract(f.image, cloud);
+    pcl::Indices all(cloud.size());
+    std::iota(all.begin(), all.end(), 0);
+    const RDMapPlaneFit fit = fitRDMapPlane(cloud, all);  // eq. (2) on all points
+    stds.push_back(fit.residual_std);
+    points += static_cast<double>(fit.points);
+    progress.update(static_cast<std::size_t>(cond * frames + k + 1));
+  }
+  const double n = static_cast<double>(stds.size());
+  const double mean = std::accumulate(stds.begin(), stds.end(), 0.0) / n;
+  double var = 0;
+  for (double s : stds) var += (s - mean) * (s - mean);
+  return {mean, std::sqrt(var / n), points / n};
+}
+
+// The table (`rows`, one per condition) on stdout and Fig. 12 (fig12.png in `out`): the mean
+// residual std per condition with its spread.
+void reportTable1(const std::filesystem::path& out, long frames,
+                  const std::vector<std::string>& rows, const std::vector<std::string>& labels,
+                  const std::vector<double>& means, const std::vector<double>& spreads) {
+  std::printf("%-10s %6s %6s %6s %8s %13s\n", "condition", "theta", "phi", "h", "points",
+              "residual std");
+  for (const std::string& row : rows) std::fputs(row.c_str(), stdout);
+  drawBarChart(
+      (out / "fig12.png").string(),
+      "Fig. 12: floor residual std per Table I pose (" + std::to_string(frames) + " frames each)",
+      "std [px]", labels, means, spreads);
+  const auto [lo, hi] = std::minmax_element(means.begin(), means.end());
+  std::printf("max / min over the conditions: %.2f (the paper: almost constant)\nwrote %s and %s\n",
+              *hi / *lo, (out / "table1.csv").string().c_str(),
+              (out / "fig12.png").string().c_str());
+}
+
+}  // namespace
+
 int runTable1(int argc, char** argv) {
   cli::ArgParser args(
       "table1",
@@ -55,49 +109,22 @@ int runTable1(int argc, char** argv) {
   std::vector<std::string> rows;
   for (int cond = 0; cond <= 6; ++cond) {
     const MountConfig mount = tableIPose(cond);
-    const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(mount);
-    std::vector<double> stds;
-    double points = 0;
-    for (long k = 0; k < frames; ++k) {
-      const RenderedFrame f =
-          sim.render(ref_scene.scene, pose, static_cast<uint64_t>(cond * 100000 + k));
-      pcl::PointCloud<PointRDM> cloud;
-      extractor.extract(f.image, cloud);
-      pcl::Indices all(cloud.size());
-      std::iota(all.begin(), all.end(), 0);
-      const RDMapPlaneFit fit = fitRDMapPlane(cloud, all);  // eq. (2) on all points
-      stds.push_back(fit.residual_std);
-      points += static_cast<double>(fit.points);
-      progress.update(static_cast<std::size_t>(cond * frames + k + 1));
-    }
-    const double n = static_cast<double>(stds.size());
-    const double mean = std::accumulate(stds.begin(), stds.end(), 0.0) / n;
-    double var = 0;
-    for (double s : stds) var += (s - mean) * (s - mean);
-    const double spread = std::sqrt(var / n);
+    const FloorNoise noise =
+        measureFloorNoise(sim, extractor, ref_scene.scene, mount, cond, frames, progress);
+    const double mean = noise.mean, spread = noise.spread, points = noise.points;
     const std::string name = cond == 0 ? "reference" : std::to_string(cond);
     labels.push_back(cond == 0 ? "ref" : name);
     means.push_back(mean);
     spreads.push_back(spread);
     csv << name << ',' << mount.tilt << ',' << mount.roll << ',' << mount.height * 1000 << ','
-        << frames << ',' << points / n << ',' << mean << ',' << spread << '\n';
+        << frames << ',' << points << ',' << mean << ',' << spread << '\n';
     char row[128];
     std::snprintf(row, sizeof row, "%-10s %6.0f %6.0f %6.0f %8.0f %10.3f px\n", name.c_str(),
-                  mount.tilt, mount.roll, mount.height * 1000, points / n, mean);
+                  mount.tilt, mount.roll, mount.height * 1000, points, mean);
     rows.push_back(row);
   }
   progress.finish();
-  std::printf("%-10s %6s %6s %6s %8s %13s\n", "condition", "theta", "phi", "h", "points",
-              "residual std");
-  for (const std::string& row : rows) std::fputs(row.c_str(), stdout);
-  drawBarChart(
-      (out / "fig12.png").string(),
-      "Fig. 12: floor residual std per Table I pose (" + std::to_string(frames) + " frames each)",
-      "std [px]", labels, means, spreads);
-  const auto [lo, hi] = std::minmax_element(means.begin(), means.end());
-  std::printf("max / min over the conditions: %.2f (the paper: almost constant)\nwrote %s and %s\n",
-              *hi / *lo, (out / "table1.csv").string().c_str(),
-              (out / "fig12.png").string().c_str());
+  reportTable1(out, frames, rows, labels, means, spreads);
   return 0;
 }
 

@@ -245,6 +245,25 @@ void trackBall(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
     r.ball_cleared = k;
 }
 
+// What appeared, and when it was detected and mapped (frame numbers; +n: frames later).
+void describeDetections(std::ostream& o, const Recorder& r, const WalkConfig& c) {
+  o << "what appeared, and when it was detected (frame numbers; +n: frames later):\n";
+  const auto frameAfter = [](int frame, int since) {
+    if (frame < 0) return std::string("never");
+    return "at frame " + std::to_string(frame) + " (+" + std::to_string(frame - since) + ")";
+  };
+  for (const auto& [name, rec] : r.objects) {
+    if (rec.first_lit < 0) continue;
+    o << "  " << name << ": in sight of the slits from frame " << rec.first_lit
+      << "; obstacle points on it " << frameAfter(rec.first_detected, rec.first_lit)
+      << (rec.last_detected >= 0 ? " to frame " + std::to_string(rec.last_detected) : "")
+      << "; occupied in the map " << frameAfter(rec.first_mapped, rec.first_lit) << "\n";
+  }
+  if (r.ball_cleared >= 0)
+    o << "  the ball rolled away from frame " << c.scene.ball_roll_frame
+      << "; the map was free where it had landed at frame " << r.ball_cleared << "\n";
+}
+
 std::string summary(const Recorder& r, const WalkSimulation& walk, double seconds,
                     const std::string& out) {
   const WalkConfig& c = walk.config();
@@ -263,21 +282,8 @@ std::string summary(const Recorder& r, const WalkSimulation& walk, double second
                 1e3 * c.pipeline.foot.foot_separation, 1e3 * c.pipeline.foot.step_length,
                 c.gait.step_frames / c.gait.frame_rate, 1e3 * c.gait.speed(c.pipeline.foot),
                 c.pipeline.foot.turn_step);
-  o << s << "what appeared, and when it was detected (frame numbers; +n: frames later):\n";
-  const auto frameAfter = [](int frame, int since) {
-    if (frame < 0) return std::string("never");
-    return "at frame " + std::to_string(frame) + " (+" + std::to_string(frame - since) + ")";
-  };
-  for (const auto& [name, rec] : r.objects) {
-    if (rec.first_lit < 0) continue;
-    o << "  " << name << ": in sight of the slits from frame " << rec.first_lit
-      << "; obstacle points on it " << frameAfter(rec.first_detected, rec.first_lit)
-      << (rec.last_detected >= 0 ? " to frame " + std::to_string(rec.last_detected) : "")
-      << "; occupied in the map " << frameAfter(rec.first_mapped, rec.first_lit) << "\n";
-  }
-  if (r.ball_cleared >= 0)
-    o << "  the ball rolled away from frame " << c.scene.ball_roll_frame
-      << "; the map was free where it had landed at frame " << r.ball_cleared << "\n";
+  o << s;
+  describeDetections(o, r, c);
   o << "what the robot did:\n";
   for (const std::string& e : r.events) o << "  " << e << "\n";
   int touched = 0;

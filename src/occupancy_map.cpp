@@ -27,6 +27,28 @@ octomap::point3d toOcto(const Eigen::Vector3d& p) {
                           static_cast<float>(p.z()));
 }
 
+// One cloud in the map frame: world x, y; height above the floor measured in this frame.
+struct MapFrame {
+  const pcl::PointCloud<PointRDM>& cloud;
+  const MetricFloor& metric;
+  const Eigen::Isometry3d& world_from_camera;
+  const octomap::OcTree& tree;
+  double resolution;  ///< [m]
+
+  Eigen::Vector3d toMap(const Eigen::Vector3d& camera) const {
+    const Eigen::Vector3d w = world_from_camera * camera;
+    return Eigen::Vector3d(w.x(), w.y(), metric.height(camera));
+  }
+  Eigen::Vector3d pointAt(std::size_t i) const {
+    const PointRDM& p = cloud[i];
+    return toMap(Eigen::Vector3d(p.x, p.y, p.z));
+  }
+  octomap::OcTreeKey keyOf(Eigen::Vector3d m) const {  // below the floor: the floor layer
+    m.z() = std::max(m.z(), 0.5 * resolution);
+    return tree.coordToKey(toOcto(m));
+  }
+};
+
 }  // namespace
 
 void OccupancyMapConfig::validate() const {
@@ -87,7 +109,71 @@ struct OccupancyMap::FrameEvidence {
                               static_cast<octomap::key_type>(mark >> 18),
                               static_cast<octomap::key_type>(mark >> 34));
   }
+
+  /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
+  /// mean), and where each slit's measured points end (a profile cut by the slit's end is biased):
+  /// `slits` and, per floor inlier, `residual`.
+  void measureSlits(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                    const OccupancyMapConfig& config);
+  /// `weak_point`: the floor inliers high above the plane for their slit and away from its ends,
+  /// in runs of min_weak_run consecutive points along the slit: an object lifts every row that
+  /// crosses it, while noise lifts one row or a pair. After measureSlits().
+  void flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                           const OccupancyMapConfig& config);
 };
+
+void OccupancyMap::FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud,
+                                               const FloorResult& floor,
+                                               const OccupancyMapConfig& config) {
+  const std::size_t rows = cloud.height, width = cloud.width;
+  slits.assign(rows, Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
+  residual.resize(cloud.size());
+  for (const auto i : floor.inliers) {
+    const auto idx = static_cast<std::size_t>(i);
+    Slit& slit = slits[idx / width];
+    const auto col = static_cast<std::uint32_t>(idx % width);
+    const double r = planeResidual(cloud[idx], floor.plane);
+    residual[idx] = r;
+    slit.sum_sq += r * r;
+    ++slit.count;
+    slit.first = std::min(slit.first, col);
+    slit.last = std::max(slit.last, col);
+  }
+  for (Slit& slit : slits) {
+    const double sigma = slit.count > 1 ? std::sqrt(slit.sum_sq / static_cast<double>(slit.count))
+                                        : floor.residual_std;
+    slit.weak = config.weak_sigmas * std::max(sigma, config.min_sigma);
+  }
+}
+
+void OccupancyMap::FrameEvidence::flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud,
+                                                      const FloorResult& floor,
+                                                      const OccupancyMapConfig& config) {
+  const std::size_t rows = cloud.height, width = cloud.width;
+  const auto end = static_cast<std::uint32_t>(config.weak_end_margin);
+  weak_point.assign(cloud.size(), 0);
+  for (const auto i : floor.inliers) {
+    const auto idx = static_cast<std::size_t>(i);
+    const Slit& slit = slits[idx / width];
+    const auto col = static_cast<std::uint32_t>(idx % width);
+    weak_point[idx] =
+        residual[idx] >= slit.weak && col >= slit.first + end && col + end <= slit.last;
+  }
+  const auto run = static_cast<std::size_t>(config.min_weak_run);
+  for (std::size_t row = 0; row < rows; ++row) {
+    std::uint8_t* flags = weak_point.data() + row * width;
+    for (std::size_t col = 0; col < width;) {
+      if (!flags[col]) {
+        ++col;
+        continue;
+      }
+      std::size_t stop = col;
+      while (stop < width && flags[stop]) ++stop;
+      if (stop - col < run) std::fill(flags + col, flags + stop, std::uint8_t{0});
+      col = stop;
+    }
+  }
+}
 
 OccupancyMap::OccupancyMap(const OccupancyMapConfig& config) : config_(config) {
   config_.validate();
@@ -131,91 +217,34 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
                            const ObstacleResult& obstacles,
                            const Eigen::Isometry3d& world_from_camera,
                            const Eigen::Vector3d& light_origin_camera, FrameEvidence& e) const {
-  const MetricFloor& metric = obstacles.floor;
-  // The map frame: world x, y; height above the floor measured in this frame.
-  const auto toMap = [&](const Eigen::Vector3d& camera) {
-    const Eigen::Vector3d w = world_from_camera * camera;
-    return Eigen::Vector3d(w.x(), w.y(), metric.height(camera));
-  };
-  const auto pointAt = [&](std::size_t i) {
-    const PointRDM& p = cloud[i];
-    return toMap(Eigen::Vector3d(p.x, p.y, p.z));
-  };
-  const auto keyOf = [&](Eigen::Vector3d m) {  // below the floor: the floor layer
-    m.z() = std::max(m.z(), 0.5 * config_.resolution);
-    return tree_->coordToKey(toOcto(m));
-  };
+  const MapFrame map{cloud, obstacles.floor, world_from_camera, *tree_, config_.resolution};
   e.marks.clear();
   // Hits: the obstacles' points.
   for (const Obstacle& o : obstacles.obstacles)
     for (const auto i : o.indices) {
       if (!hasXYZ(cloud[static_cast<std::size_t>(i)])) continue;
-      const Eigen::Vector3d m = pointAt(static_cast<std::size_t>(i));
-      if (m.z() <= config_.max_height) e.mark(keyOf(m), FrameEvidence::kHit);
+      const Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
+      if (m.z() <= config_.max_height) e.mark(map.keyOf(m), FrameEvidence::kHit);
     }
   // Weak points: groups rejected as noise, and floor points high above the plane.
-  const auto residual = [&](const PointRDM& p) { return planeResidual(p, floor.plane); };
   for (const auto i : obstacles.rejected) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    if (!hasXYZ(p) || residual(p) <= 0) continue;
-    const Eigen::Vector3d m = pointAt(static_cast<std::size_t>(i));
-    if (m.z() <= config_.max_height) e.mark(keyOf(m), FrameEvidence::kWeak);
+    if (!hasXYZ(p) || planeResidual(p, floor.plane) <= 0) continue;
+    const Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
+    if (m.z() <= config_.max_height) e.mark(map.keyOf(m), FrameEvidence::kWeak);
   }
-  // Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
-  // mean), and where each slit's measured points end (a profile cut by the slit's end is biased).
-  const std::size_t rows = cloud.height, width = cloud.width;
-  e.slits.assign(rows, FrameEvidence::Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
-  e.residual.resize(cloud.size());
-  for (const auto i : floor.inliers) {
-    const auto idx = static_cast<std::size_t>(i);
-    FrameEvidence::Slit& slit = e.slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
-    const double r = residual(cloud[idx]);
-    e.residual[idx] = r;
-    slit.sum_sq += r * r;
-    ++slit.count;
-    slit.first = std::min(slit.first, col);
-    slit.last = std::max(slit.last, col);
-  }
-  for (FrameEvidence::Slit& slit : e.slits) {
-    const double sigma = slit.count > 1 ? std::sqrt(slit.sum_sq / static_cast<double>(slit.count))
-                                        : floor.residual_std;
-    slit.weak = config_.weak_sigmas * std::max(sigma, config_.min_sigma);
-  }
-  const auto end = static_cast<std::uint32_t>(config_.weak_end_margin);
-  e.weak_point.assign(cloud.size(), 0);
-  for (const auto i : floor.inliers) {
-    const auto idx = static_cast<std::size_t>(i);
-    const FrameEvidence::Slit& slit = e.slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
-    e.weak_point[idx] =
-        e.residual[idx] >= slit.weak && col >= slit.first + end && col + end <= slit.last;
-  }
-  // Only runs of min_weak_run consecutive weak points along a slit count: an object lifts every
-  // row that crosses it, while noise lifts one row or a pair.
-  const auto run = static_cast<std::size_t>(config_.min_weak_run);
-  for (std::size_t row = 0; row < rows; ++row) {
-    std::uint8_t* flags = e.weak_point.data() + row * width;
-    for (std::size_t col = 0; col < width;) {
-      if (!flags[col]) {
-        ++col;
-        continue;
-      }
-      std::size_t stop = col;
-      while (stop < width && flags[stop]) ++stop;
-      if (stop - col < run) std::fill(flags + col, flags + stop, std::uint8_t{0});
-      col = stop;
-    }
-  }
-  const Eigen::Vector3d light = toMap(light_origin_camera);
+  e.measureSlits(cloud, floor, config_);
+  e.flagWeakFloorPoints(cloud, floor, config_);
+  // Floor points: floor (or weak) marks, and the free cells of the light ray that reached them.
+  const Eigen::Vector3d light = map.toMap(light_origin_camera);
   octomap::OcTreeKey last_ray;  // floor voxel of the last ray: the points of a slit come in order
   int last_slit = -1;
   for (const auto i : floor.inliers) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
     if (!hasXYZ(p)) continue;
-    Eigen::Vector3d m = pointAt(static_cast<std::size_t>(i));
+    Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
     m.z() = 0.0;  // on the floor: its height is noise
-    const octomap::OcTreeKey key = keyOf(m);
+    const octomap::OcTreeKey key = map.keyOf(m);
     const bool is_weak = e.weak_point[static_cast<std::size_t>(i)] != 0;
     e.mark(key, is_weak ? FrameEvidence::kWeak : FrameEvidence::kFloor);
     if (is_weak || (key == last_ray && p.slit == last_slit)) continue;

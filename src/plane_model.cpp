@@ -1,13 +1,11 @@
 #include "multislit/plane_model.h"
 
-#include "rdm_simd.h"
+#include "plane_kernels.h"
 
 #include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -88,124 +86,6 @@ class PlaneSums {
   std::size_t n_ = 0;
 };
 
-/// Points of the centred arrays within t of the plane dk = a u + b v + c, over [begin, end): the
-/// hot loop of RANSAC. Also compiled for AVX2 (eight points per instruction, chosen at run time);
-/// both clones make the same float operations, so they count the same.
-__attribute__((target_clones("avx2", "default"))) unsigned countNear(const float* u, const float* v,
-                                                                     const float* dk,
-                                                                     std::size_t begin,
-                                                                     std::size_t end, float a,
-                                                                     float b, float c, float t) {
-  unsigned count = 0;
-  for (std::size_t k = begin; k < end; ++k)
-    count += std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t;
-  return count;
-}
-
-/// The sums of eq. (2) over the points of the centred arrays within t of the plane, in one pass:
-/// 8 points per step in float, added to double every 256 points.
-struct InlierSums {
-  double n = 0, u = 0, v = 0, dk = 0, uu = 0, uv = 0, vv = 0, udk = 0, vdk = 0, dkdk = 0;
-};
-
-__attribute__((target_clones("avx2", "default"))) InlierSums sumInliers(const float* u,
-                                                                        const float* v,
-                                                                        const float* dk,
-                                                                        std::size_t size, float a,
-                                                                        float b, float c, float t) {
-  typedef float F8 __attribute__((vector_size(32)));
-  typedef std::int32_t I8 __attribute__((vector_size(32)));
-  constexpr std::size_t kLanes = 8, kFlush = 256;
-  InlierSums out;
-  const F8 one = {1, 1, 1, 1, 1, 1, 1, 1};
-  std::size_t k = 0;
-  for (; k + kLanes <= size;) {
-    F8 n = {}, su = {}, sv = {}, sd = {}, suu = {}, suv = {}, svv = {}, sud = {}, svd = {},
-       sdd = {};
-    for (const std::size_t stop = std::min(size, k + kFlush); k + kLanes <= stop; k += kLanes) {
-      F8 pu, pv, pd;
-      std::memcpy(&pu, u + k, sizeof pu);
-      std::memcpy(&pv, v + k, sizeof pv);
-      std::memcpy(&pd, dk + k, sizeof pd);
-      const F8 r = pd - (a * pu + b * pv + c);
-      const I8 in = (F8)((I8)r & 0x7fffffff) <= t;  // |r| <= t: all ones, else 0
-      const F8 wu = (F8)(in & (I8)pu), wv = (F8)(in & (I8)pv), wd = (F8)(in & (I8)pd);
-      n += (F8)(in & (I8)one);
-      su += wu;
-      sv += wv;
-      sd += wd;
-      suu += wu * pu;
-      suv += wu * pv;
-      svv += wv * pv;
-      sud += wu * pd;
-      svd += wv * pd;
-      sdd += wd * pd;
-    }
-    for (std::size_t l = 0; l < kLanes; ++l) {
-      out.n += n[l];
-      out.u += su[l];
-      out.v += sv[l];
-      out.dk += sd[l];
-      out.uu += suu[l];
-      out.uv += suv[l];
-      out.vv += svv[l];
-      out.udk += sud[l];
-      out.vdk += svd[l];
-      out.dkdk += sdd[l];
-    }
-  }
-  for (; k < size; ++k) {  // the last points, one by one
-    if (!(std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t)) continue;
-    const double pu = u[k], pv = v[k], pd = dk[k];
-    out.n += 1;
-    out.u += pu;
-    out.v += pv;
-    out.dk += pd;
-    out.uu += pu * pu;
-    out.uv += pu * pv;
-    out.vv += pv * pv;
-    out.udk += pu * pd;
-    out.vdk += pv * pd;
-    out.dkdk += pd * pd;
-  }
-  return out;
-}
-
-/// Copies the index, u, v and dk of the valid points among points[0 .. n), n a multiple of four,
-/// into the arrays, in order, four points at a time: their (u, v, dk, slit) transposed into one
-/// register per field, then stored four at once when all four are valid (nearly always). Returns
-/// the number of valid points.
-std::size_t gatherValidByFour(const PointRDM* points, std::size_t n, pcl::index_t* index, float* u,
-                              float* v, float* dk) {
-  std::size_t kept = 0;
-  for (std::size_t k = 0; k < n; k += 4) {
-    const simd::UVDK4 p = simd::loadUVDK(points[k], points[k + 1], points[k + 2], points[k + 3]);
-    const int valid = simd::validMask(p);
-    const auto i = static_cast<pcl::index_t>(k);
-    if (valid == 0xf) {
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(index + kept),
-                       _mm_setr_epi32(i, i + 1, i + 2, i + 3));
-      _mm_storeu_ps(u + kept, p.u);
-      _mm_storeu_ps(v + kept, p.v);
-      _mm_storeu_ps(dk + kept, p.dk);
-      kept += 4;
-      continue;
-    }
-    alignas(16) float lu[4], lv[4], ldk[4];
-    _mm_store_ps(lu, p.u);
-    _mm_store_ps(lv, p.v);
-    _mm_store_ps(ldk, p.dk);
-    for (int j = 0; j < 4; ++j) {  // as in cacheValidPoints()
-      index[kept] = i + j;
-      u[kept] = lu[j];
-      v[kept] = lv[j];
-      dk[kept] = ldk[j];
-      kept += (valid >> j) & 1;
-    }
-  }
-  return kept;
-}
-
 }  // namespace
 
 RDMapPlaneFit fitRDMapPlane(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& indices) {
@@ -230,8 +110,8 @@ RDMapPlaneFit SampleConsensusModelRDMapPlane::fitWithinDistance(
   }
   // The sums of eq. (2) over the inliers of the centred arrays, in one vectorized pass (float
   // partial sums; the centring keeps them accurate to ~1e-6).
-  const InlierSums in = sumInliers(u_.data(), v_.data(), dk_.data(), u_.size(), a, b,
-                                   centredC(model_coefficients), t);
+  const simd::InlierSums in = simd::sumInliers(u_.data(), v_.data(), dk_.data(), u_.size(), a, b,
+                                               centredC(model_coefficients), t);
   PlaneSums sums(mean_u_, mean_v_, mean_dk_);
   sums.set(in.uu, in.uv, in.u, in.vv, in.v, in.udk, in.vdk, in.dk, in.dkdk,
            static_cast<std::size_t>(in.n));
@@ -282,7 +162,7 @@ void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {
   std::size_t kept = 0, k = 0;
   if (!among_indices) {
     k = candidates - candidates % 4;
-    kept = gatherValidByFour(points, k, index, u, v, dk);
+    kept = simd::gatherValidByFour(points, k, index, u, v, dk);
   }
   for (; k < candidates; ++k) {
     // Branch-free: every point is written at `kept`, which moves on only for a valid one.
@@ -428,7 +308,7 @@ std::size_t SampleConsensusModelRDMapPlane::countWithinDistance(
     const float* u = u_.data();
     const float* v = v_.data();
     const float* dk = dk_.data();
-    return countNear(u, v, dk, 0, u_.size(), a, b, centredC(model_coefficients), t);
+    return simd::countNear(u, v, dk, 0, u_.size(), a, b, centredC(model_coefficients), t);
   }
   std::size_t count = 0;
   for (const auto i : *indices_) count += std::abs(planeResidual((*input_)[i], a, b, c)) <= t;
@@ -449,7 +329,7 @@ std::size_t SampleConsensusModelRDMapPlane::countWithinDistanceIfMore(
   std::size_t count = 0;
   for (std::size_t begin = 0; begin < n; begin += kBlock) {
     const std::size_t end = std::min(n, begin + kBlock);
-    count += countNear(u, v, dk, begin, end, a, b, cc, t);
+    count += simd::countNear(u, v, dk, begin, end, a, b, cc, t);
     if (count + (n - end) <= best) return count;  // cannot beat `best` any more
   }
   return count;

@@ -12,6 +12,8 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace multislit {
 namespace {
@@ -34,6 +36,56 @@ int widestRegion(const std::vector<ReferenceSlit>& slits, int image_height) {
   }
   // Regions [u - W/2, u + W/2] of neighbours share no column when W <= gap - 1.
   return std::isfinite(min_gap) ? static_cast<int>(std::floor(min_gap)) - 1 : 0;
+}
+
+// One reference point seen on the plane images: u_k = u_inf + K / Z_k.
+struct PlaneObservation {
+  std::size_t slit, row;
+  std::vector<std::pair<double, double>> wu;  // (1 / Z, u)
+
+  std::pair<double, double> means() const {  // of 1 / Z and of u
+    double mw = 0, mu = 0;
+    for (const auto& [w, u] : wu) mw += w, mu += u;
+    mw /= static_cast<double>(wu.size());
+    mu /= static_cast<double>(wu.size());
+    return {mw, mu};
+  }
+};
+
+// Every point of the reference slits `slits` as seen on the plane images at `depths`
+// (`seen`: their slits, in the same order).
+std::vector<PlaneObservation> observeOnPlanes(const std::vector<ReferenceSlit>& slits,
+                                              const std::vector<std::vector<ReferenceSlit>>& seen,
+                                              const std::vector<double>& depths) {
+  std::vector<PlaneObservation> obs;
+  for (std::size_t s = 0; s < slits.size(); ++s)
+    for (std::size_t r = 0; r < slits[s].u.size(); ++r) {
+      PlaneObservation o{s, r, {}};
+      const int row = slits[s].first_row + static_cast<int>(r);
+      for (std::size_t k = 0; k < seen.size(); ++k) {
+        const ReferenceSlit& p = seen[k][s];
+        if (row < p.first_row || row > p.lastRow()) continue;
+        const float u = p.u[static_cast<std::size_t>(row - p.first_row)];
+        if (std::isfinite(u)) o.wu.emplace_back(1.0 / depths[k], u);
+      }
+      obs.push_back(std::move(o));
+    }
+  return obs;
+}
+
+// The one K of u = u_inf + K / Z that fits every point seen at two depths or more (least
+// squares, u_inf per point) [px m].
+double fitDisparityConstant(const std::vector<PlaneObservation>& obs) {
+  double num = 0, den = 0;
+  for (const PlaneObservation& o : obs) {
+    if (o.wu.size() < 2) continue;
+    const auto [mw, mu] = o.means();
+    for (const auto& [w, u] : o.wu) num += (u - mu) * (w - mw), den += (w - mw) * (w - mw);
+  }
+  if (!(den > 0) || !(num > 0))
+    throw std::runtime_error(
+        "calibration: the plane images do not constrain the scale (same depths?)");
+  return num / den;
 }
 
 }  // namespace
@@ -159,45 +211,14 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
     seen.push_back(detectSlits(images[k], config, what).slits);
   }
   // u_k = u_inf + K / Z_k for every reference point: one K for all, u_inf per point.
-  struct Obs {
-    std::size_t slit, row;
-    std::vector<std::pair<double, double>> wu;  // (1 / Z, u)
-  };
-  std::vector<Obs> obs;
-  for (std::size_t s = 0; s < slits.size(); ++s)
-    for (std::size_t r = 0; r < slits[s].u.size(); ++r) {
-      Obs o{s, r, {}};
-      const int row = slits[s].first_row + static_cast<int>(r);
-      for (std::size_t k = 0; k < seen.size(); ++k) {
-        const ReferenceSlit& p = seen[k][s];
-        if (row < p.first_row || row > p.lastRow()) continue;
-        const float u = p.u[static_cast<std::size_t>(row - p.first_row)];
-        if (std::isfinite(u)) o.wu.emplace_back(1.0 / depths[k], u);
-      }
-      obs.push_back(std::move(o));
-    }
-  double num = 0, den = 0;
-  for (const Obs& o : obs) {
-    if (o.wu.size() < 2) continue;
-    double mw = 0, mu = 0;
-    for (const auto& [w, u] : o.wu) mw += w, mu += u;
-    mw /= static_cast<double>(o.wu.size());
-    mu /= static_cast<double>(o.wu.size());
-    for (const auto& [w, u] : o.wu) num += (u - mu) * (w - mw), den += (w - mw) * (w - mw);
-  }
-  if (!(den > 0) || !(num > 0))
-    throw std::runtime_error(
-        "calibration: the plane images do not constrain the scale (same depths?)");
-  const double k_fb = num / den;
+  const std::vector<PlaneObservation> obs = observeOnPlanes(slits, seen, depths);
+  const double k_fb = fitDisparityConstant(obs);
   double ss = 0;
   std::size_t m = 0;
   for (ReferenceSlit& s : slits) s.u_inf.assign(s.u.size(), kNaN);
-  for (const Obs& o : obs) {
+  for (const PlaneObservation& o : obs) {
     if (o.wu.size() < 2) continue;
-    double mw = 0, mu = 0;
-    for (const auto& [w, u] : o.wu) mw += w, mu += u;
-    mw /= static_cast<double>(o.wu.size());
-    mu /= static_cast<double>(o.wu.size());
+    const auto [mw, mu] = o.means();
     const double u_inf = mu - k_fb * mw;
     slits[o.slit].u_inf[o.row] = static_cast<float>(u_inf);
     for (const auto& [w, u] : o.wu) ss += (u - u_inf - k_fb * w) * (u - u_inf - k_fb * w), ++m;

@@ -1,8 +1,8 @@
 // MultiSlitGrabber: PCL signals, headers, back-pressure, stop() from callbacks and with sources
-// that hang, and end to end over GigE Vision on 127.0.0.1 (CameraEmulator + AravisSource).
+// that hang (end to end over GigE Vision: grabber_gige_test).
 #include "multislit/grabber.h"
 #include "camera_test_support.h"
-#include "multislit/sim/simulated_source.h"
+#include "grabber_test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -12,12 +12,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <functional>
-#include <mutex>
-#include <set>
 #include <thread>
 
 namespace multislit {
@@ -46,27 +42,6 @@ cv::Mat slitImage(double shift) {
 const Reference& slitReference() {
   static const Reference reference = Reference::fromImage(slitImage(0));
   return reference;
-}
-
-// The simulated sensor: a reference with metric scale and two frames of the ball walk.
-struct SimData {
-  Reference reference;
-  std::vector<cv::Mat> frames;
-};
-
-const SimData& simData() {
-  static const SimData data = [] {
-    SimulatorSourceConfig config;
-    config.scenario = "ball";
-    config.render.supersample = 1;
-    config.frames = 2;
-    SimulatorSource source(config);
-    SimData d{source.makeReference(), {}};
-    source.start();
-    while (std::optional<Frame> f = source.next(milliseconds(100))) d.frames.push_back(f->image);
-    return d;
-  }();
-  return data;
 }
 
 // A source in memory: images in turn at a rate (0: at once), optionally finite, throwing or
@@ -126,17 +101,6 @@ class MemorySource : public FrameSource {
   std::atomic<std::uint64_t> count_{0}, delivered_{0};
   int calls_ = 0;
 };
-
-std::vector<float> dkOf(const pcl::PointCloud<PointRDM>& cloud) {
-  std::vector<float> dk;
-  for (const PointRDM& p : cloud.points) dk.push_back(p.dk);
-  return dk;
-}
-
-// Bitwise: NaN where NaN, the same float bits elsewhere.
-bool sameBits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
-}
 
 std::size_t residentBytes() {
   std::ifstream statm("/proc/self/statm");
@@ -376,230 +340,6 @@ TEST(MultiSlitGrabber, DestructionWhileRunningIsSafe) {
     grabber.reset();
     EXPECT_EQ(source->starts, source->stops);
   }
-}
-
-// --- end to end over GigE Vision on 127.0.0.1 ------------------------------------------------
-
-std::shared_ptr<AravisSource> gigeSource(double fps) {
-  AravisConfig c;
-  c.camera = CameraEmulator::kAddress;
-  c.roi_width = simData().frames[0].cols;
-  c.roi_height = simData().frames[0].rows;
-  c.frame_rate = fps;
-  c.packet_size = 8192;  // loopback carries large datagrams
-  return std::make_shared<AravisSource>(c);
-}
-
-TEST(GigEVision, CloudsEqualExtractingTheServedImages) {
-  const SimData& sim = simData();
-  EmulatorConfig ec;
-  ec.fps = 30;
-  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
-  REQUIRE_EMULATOR(emulator);
-  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
-  std::mutex mutex;
-  std::vector<RdmapPtr> clouds;
-  std::vector<XyzPtr> xyzs;
-  std::vector<FramePtr> frames;
-  std::function<MultiSlitGrabber::sig_cb_rdmap> on_cloud = [&](const RdmapPtr& c) {
-    std::lock_guard<std::mutex> lock(mutex);
-    clouds.push_back(c);
-  };
-  std::function<MultiSlitGrabber::sig_cb_xyz> on_xyz = [&](const XyzPtr& c) {
-    std::lock_guard<std::mutex> lock(mutex);
-    xyzs.push_back(c);
-  };
-  std::function<MultiSlitGrabber::sig_cb_frame> on_frame = [&](const FramePtr& f) {
-    std::lock_guard<std::mutex> lock(mutex);
-    frames.push_back(f);
-  };
-  grabber.registerCallback(on_cloud);
-  grabber.registerCallback(on_xyz);
-  grabber.registerCallback(on_frame);
-  grabber.start();
-  EXPECT_TRUE(waitFor([&] {
-    std::lock_guard<std::mutex> lock(mutex);
-    return clouds.size() >= 8;
-  }));
-  grabber.stop();
-
-  const Extractor extractor(sim.reference);
-  std::vector<std::vector<float>> expected;
-  for (const cv::Mat& image : sim.frames) {
-    pcl::PointCloud<PointRDM> direct;
-    extractor.extract(image, direct);
-    expected.push_back(dkOf(direct));
-  }
-  ASSERT_GE(clouds.size(), 8u);
-  ASSERT_EQ(xyzs.size(), clouds.size());
-  ASSERT_EQ(frames.size(), clouds.size());
-  std::set<std::size_t> seen;
-  for (std::size_t i = 0; i < clouds.size(); ++i) {
-    const pcl::PointCloud<PointRDM>& c = *clouds[i];
-    const std::size_t image = emulator->imageIndex(c.header.seq);
-    seen.insert(image);
-    EXPECT_TRUE(sameBits(dkOf(c), expected[image])) << "cloud " << i << " frame " << c.header.seq;
-    EXPECT_EQ(cv::countNonZero(frames[i]->image != sim.frames[image]), 0);
-    EXPECT_NEAR(static_cast<double>(c.header.stamp), static_cast<double>(nowMicros()), 30e6);
-    EXPECT_EQ(c.header.frame_id, "multislit_camera");
-    if (i > 0) {
-      EXPECT_GT(c.header.stamp, clouds[i - 1]->header.stamp);
-    }
-    // The metric cloud: the same points, organized, NaN kept.
-    const pcl::PointCloud<pcl::PointXYZ>& m = *xyzs[i];
-    EXPECT_EQ(m.header.seq, c.header.seq);
-    ASSERT_EQ(m.width, c.width);
-    ASSERT_EQ(m.height, c.height);
-    EXPECT_FALSE(m.is_dense);
-    std::size_t finite = 0;
-    for (std::size_t k = 0; k < m.size(); ++k) {
-      EXPECT_EQ(std::isfinite(m[k].z), std::isfinite(c[k].z));
-      if (std::isfinite(m[k].z)) {
-        ++finite;
-        EXPECT_EQ(m[k].z, c[k].z);
-      }
-    }
-    EXPECT_GT(finite, m.size() / 2);
-  }
-  EXPECT_EQ(seen.size(), sim.frames.size());  // both images went through
-}
-
-TEST(GigEVision, LostPacketsAreCountedAndSurvived) {
-  const SimData& sim = simData();
-  EmulatorConfig ec;
-  ec.fps = 60;
-  ec.lost_packet_ratio = 0.003;  // ~155 packets of 8 kB per frame: about one frame in three lost
-  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
-  REQUIRE_EMULATOR(emulator);
-  MultiSlitGrabber grabber(gigeSource(60), sim.reference);
-  const Extractor extractor(sim.reference);
-  std::atomic<int> clouds{0}, wrong{0};
-  std::function<MultiSlitGrabber::sig_cb_rdmap> check = [&](const RdmapPtr& c) {
-    pcl::PointCloud<PointRDM> direct;
-    extractor.extract(sim.frames[emulator->imageIndex(c->header.seq)], direct);
-    wrong += !sameBits(dkOf(*c), dkOf(direct));
-    ++clouds;
-  };
-  grabber.registerCallback(check);
-  grabber.start();
-  EXPECT_TRUE(waitFor([&] { return grabber.getStats().source.bad_buffers > 0 && clouds >= 3; }));
-  grabber.stop();
-  const GrabberStats s = grabber.getStats();
-  std::printf("lost packets 0.3%%: %llu frames good, %llu bad buffers, %llu dropped (busy)\n",
-              static_cast<unsigned long long>(s.source.frames),
-              static_cast<unsigned long long>(s.source.bad_buffers),
-              static_cast<unsigned long long>(s.frames_dropped));
-  EXPECT_GT(s.source.bad_buffers, 0u);
-  EXPECT_GT(clouds, 0);
-  EXPECT_EQ(wrong, 0);  // a broken frame never reaches the callbacks
-}
-
-TEST(GigEVision, StopWithinASecondWhenTheCameraStopsSendingOrGoesAway) {
-  const SimData& sim = simData();
-  std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames);
-  REQUIRE_EMULATOR(emulator);
-  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
-  std::atomic<int> clouds{0};
-  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
-  grabber.registerCallback(count);
-
-  // 1. The camera answers but sends nothing.
-  grabber.start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }));
-  emulator->setLostPacketRatio(1.0);
-  std::this_thread::sleep_for(milliseconds(500));
-  auto t0 = Clock::now();
-  grabber.stop();
-  const double silent_ms = msSince(t0);
-  EXPECT_LT(silent_ms, 1000.0);
-
-  // 2. The camera is gone: its control requests time out in Aravis, stop() does not wait.
-  emulator->setLostPacketRatio(0.0);
-  const int before = clouds;
-  grabber.start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= before + 3; }));
-  emulator.reset();
-  std::this_thread::sleep_for(milliseconds(300));
-  t0 = Clock::now();
-  grabber.stop();
-  const double gone_ms = msSince(t0);
-  EXPECT_LT(gone_ms, 1000.0);
-  std::printf("stop(): %.1f ms with a silent camera, %.1f ms with a vanished one\n", silent_ms,
-              gone_ms);
-  emulator = makeEmulator(sim.frames);  // lets the stuck release finish soon
-}
-
-TEST(GigEVision, StartStopCycles) {
-  const SimData& sim = simData();
-  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames);
-  REQUIRE_EMULATOR(emulator);
-  MultiSlitGrabber grabber(gigeSource(30), sim.reference);
-  std::atomic<int> clouds{0};
-  std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
-  grabber.registerCallback(count);
-  double worst_ms = 0;
-  for (int cycle = 0; cycle < 10; ++cycle) {
-    const int before = clouds;
-    grabber.start();
-    std::this_thread::sleep_for(milliseconds(50 * (cycle % 3)));
-    // The last cycle stops only after a cloud came: opening a camera may take longer than 100 ms.
-    if (cycle == 9) {
-      EXPECT_TRUE(waitFor([&] { return clouds > before; }));
-    }
-    const auto t0 = Clock::now();
-    grabber.stop();
-    worst_ms = std::max(worst_ms, msSince(t0));
-  }
-  EXPECT_LT(worst_ms, 1000.0);
-  EXPECT_GT(clouds, 0);
-  EXPECT_EQ(grabber.getStats().source.reconnects, 0u);
-}
-
-TEST(GigEVision, FullSizeThroughputAndLatency) {
-  const SimData& sim = simData();
-  EmulatorConfig ec;
-  ec.fps = 200;
-  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
-  REQUIRE_EMULATOR(emulator);
-  MultiSlitGrabber grabber(gigeSource(200), sim.reference);
-  // The emulated camera's 16-bit frame ids wrap after ~135 frames: seq must still increase.
-  std::uint32_t last_seq = 0;
-  std::uint64_t last_stamp = 0;
-  std::atomic<int> backwards{0};
-  std::function<MultiSlitGrabber::sig_cb_rdmap> consume = [&](const RdmapPtr& c) {
-    backwards += last_stamp != 0 && (c->header.seq <= last_seq || c->header.stamp <= last_stamp);
-    last_seq = c->header.seq;
-    last_stamp = c->header.stamp;
-  };
-  grabber.registerCallback(consume);
-  grabber.start();
-  // Settle (the first frames), then measure over at least 2 s and 20 processed frames.
-  EXPECT_TRUE(waitFor([&] { return grabber.getStats().frames_processed >= 10; }));
-  const GrabberStats a = grabber.getStats();
-  const auto t0 = Clock::now();
-  std::this_thread::sleep_for(milliseconds(2000));
-  EXPECT_TRUE(
-      waitFor([&] { return grabber.getStats().frames_processed >= a.frames_processed + 20; }));
-  const GrabberStats b = grabber.getStats();
-  const double seconds = msSince(t0) / 1000;
-  grabber.stop();
-  const double received = static_cast<double>(b.frames_received - a.frames_received) / seconds;
-  const double processed = static_cast<double>(b.frames_processed - a.frames_processed) / seconds;
-  std::printf(
-      "GigE Vision 1296x964 Mono8 on 127.0.0.1: %.1f frames/s received, %.1f processed; latency "
-      "arrival -> callback median %.2f ms, 99th %.2f ms; %llu dropped, %llu bad buffers\n",
-      received, processed, b.latency_median_ms, b.latency_p99_ms,
-      static_cast<unsigned long long>(b.frames_dropped),
-      static_cast<unsigned long long>(b.source.bad_buffers));
-  RecordProperty("received_fps", std::to_string(received));
-  RecordProperty("latency_median_ms", std::to_string(b.latency_median_ms));
-  RecordProperty("latency_p99_ms", std::to_string(b.latency_p99_ms));
-  // Speed is the benchmark's business; here only sanity: frames went through, and the latency
-  // is a real duration, not a mix-up of clocks (a generous bound for a loaded machine).
-  EXPECT_EQ(backwards, 0);
-  EXPECT_GE(b.frames_processed, a.frames_processed + 20);
-  EXPECT_GT(b.latency_median_ms, 0.0);
-  EXPECT_LT(b.latency_median_ms, 2000.0);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <stdexcept>
+#include <utility>
 
 namespace multislit {
 namespace {
@@ -33,9 +34,12 @@ class Draw {
 
 using Edit = std::function<void(Photometry&)>;
 
-// The presets, as edits of today's photometry (RenderConfig{}, FloorConfig{}).
-const std::vector<std::pair<std::string, Edit>>& presets() {
-  static const std::vector<std::pair<std::string, Edit>> list = {
+using Preset = std::pair<std::string, Edit>;
+
+// The light that reaches the camera: the laser's power against the room's light, the stripe's
+// focus and its speckle.
+std::vector<Preset> lightPresets() {
+  return {
       {"default", [](Photometry&) {}},
       {"bright-room", [](Photometry& p) { p.render.ambient *= 4; }},
       {"dark-floor",
@@ -60,6 +64,12 @@ const std::vector<std::pair<std::string, Edit>>& presets() {
          p.render.speckle_contrast = 0.9;
          p.render.speckle_grain = 1.0;
        }},
+  };
+}
+
+// The surfaces (textured, glossy, translucent) and the camera (bit depth, gamma, noise).
+std::vector<Preset> surfaceAndCameraPresets() {
+  return {
       {"tiles",
        [](Photometry& p) {
          p.floor.texture = FloorTexture::Tiles;
@@ -96,6 +106,15 @@ const std::vector<std::pair<std::string, Edit>>& presets() {
          p.object_stripe_width = 2.0;  // subsurface scattering: a wider, dimmer stripe
        }},
   };
+}
+
+// The presets, as edits of today's photometry (RenderConfig{}, FloorConfig{}), in this order.
+const std::vector<Preset>& presets() {
+  static const std::vector<Preset> list = [] {
+    std::vector<Preset> all = lightPresets();
+    for (Preset& preset : surfaceAndCameraPresets()) all.push_back(std::move(preset));
+    return all;
+  }();
   return list;
 }
 

@@ -1,6 +1,7 @@
 #include "multislit/sim/simulator.h"
 
-#include <boost/math/special_functions/gamma.hpp>
+#include "sim/image_noise.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -11,60 +12,6 @@
 
 namespace multislit {
 namespace {
-
-// Counter-based random numbers: each image row has its own stream, so the bytes do not depend
-// on how rows are shared between threads.
-class RowRandom {
- public:
-  RowRandom(uint64_t seed, uint64_t frame, uint64_t row, uint64_t stream)
-      : state_(mix(mix(mix(seed) ^ frame) ^ (row << 8 | stream))) {}
-
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-  double normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double u1 = 1.0 - uniform(), u2 = uniform();  // u1 in (0, 1]
-    const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2.0 * M_PI * u2);
-    has_spare_ = true;
-    return r * std::cos(2.0 * M_PI * u2);
-  }
-
- private:
-  static uint64_t mix(uint64_t z) {
-    z += 0x9E3779B97F4A7C15ULL;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  uint64_t next() { return mix(state_ += 0x9E3779B97F4A7C15ULL); }
-
-  uint64_t state_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
-
-enum Stream : uint64_t { kSpeckle = 1, kSensorNoise = 2 };
-
-// The gamma speckle's quantile table: standard normal values z in [-reach, reach], `step` per unit.
-constexpr double kQuantileReach = 8.0, kQuantileStep = 128.0;
-
-// Gamma(shape k, mean 1) quantile at the normal quantile of each z of the table.
-std::vector<float> gammaQuantiles(double contrast) {
-  const double k = 1.0 / (contrast * contrast);
-  const int n = static_cast<int>(2 * kQuantileReach * kQuantileStep) + 1;
-  std::vector<float> table(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    const double z = i / kQuantileStep - kQuantileReach;
-    // The lower tail from P, the upper tail from Q: both accurate far out.
-    const double x = z < 0 ? boost::math::gamma_p_inv(k, 0.5 * std::erfc(-z / std::sqrt(2.0)))
-                           : boost::math::gamma_q_inv(k, 0.5 * std::erfc(z / std::sqrt(2.0)));
-    table[static_cast<std::size_t>(i)] = static_cast<float>(x / k);
-  }
-  return table;
-}
 
 // Mean of exp(-x^2 / 2 sigma^2) over a pixel on which x = d0 + a p + b q, p and q uniform in
 // [-1/2, 1/2]: a Gaussian sheet profile integrated exactly over a pixel where the sheet offset
@@ -143,41 +90,98 @@ struct Shader {
   }
 };
 
-// Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel): a
-// white Gaussian field blurred by the grain, then either 1 + contrast x field clamped at 0
-// (Gaussian) or the field's normal quantile mapped to the gamma distribution's (Gamma).
-void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
-                  const std::vector<float>& gamma_quantiles) {
-  cv::Mat speckle(laser.rows, laser.cols, CV_32F);
-  cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
+// The samples of the pixel centres, row-major, with the light that does not depend on the sheets.
+struct CentreSamples {
+  int width = 0, height = 0;
+  std::vector<Shader::Sample> samples;
+  cv::Mat ambient;  // ambient light and glare per pixel, CV_32F [FS]
+  cv::Mat near;     // CV_8U: 1 where a sheet may light the pixel
+
+  const Shader::Sample& at(int r, int c) const {
+    return samples[static_cast<std::size_t>(r) * width + c];
+  }
+};
+
+// How far from a sheet's centre [rad] light is traced: beyond 4.5 sigma a sheet adds < 4e-5 of
+// its peak, for the widest sheet on any surface.
+double sheetReach(const Scene& scene, double sigma, double pixel) {
+  double widest = scene.stripeWidth(0);
+  for (std::size_t k = 0; k < scene.objects.size(); ++k)
+    widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
+  return 4.5 * sigma * widest + 2 * pixel;
+}
+
+// Every pixel centre: its surface, ambient light and where the laser sheets are.
+CentreSamples traceCentres(const Shader& shader, double reach, double pixel) {
+  const SensorGeometry& geometry = shader.geometry;
+  const int width = geometry.config().camera.width, height = geometry.config().camera.height;
+  CentreSamples centre{width, height,
+                       std::vector<Shader::Sample>(static_cast<std::size_t>(width) * height),
+                       cv::Mat(height, width, CV_32F), cv::Mat(height, width, CV_8U)};
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
-      RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSpeckle);
-      float* s = speckle.ptr<float>(r);
-      for (int c = 0; c < laser.cols; ++c) s[c] = static_cast<float>(rng.normal());
+      for (int c = 0; c < width; ++c) {
+        const Shader::Sample& s = centre.samples[static_cast<std::size_t>(r) * width + c] =
+            shader.trace(c, r, reach);
+        centre.ambient.ptr<float>(r)[c] =
+            static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
+        centre.near.ptr<uchar>(r)[c] =
+            std::abs(s.offset) < reach && std::abs(s.t) < geometry.slitTMax() + 2 * pixel;
+      }
     }
   });
-  const double g = render.speckle_grain;
-  cv::GaussianBlur(speckle, speckle, cv::Size(), g, g, cv::BORDER_REFLECT);
-  if (render.speckle_model == SpeckleModel::Gaussian) {
-    speckle = 1.0 + render.speckle_contrast * 2.0 * std::sqrt(M_PI) * g * speckle;
-    cv::max(speckle, 0.0, speckle);
-  } else {
-    // The blurred field's std is the sum of the squared 1-D kernel weights (OpenCV's kernel).
-    const cv::Mat k = cv::getGaussianKernel(cv::saturate_cast<int>(g * 8 + 1) | 1, g, CV_64F);
-    const double scale = 1.0 / k.dot(k), last = static_cast<double>(gamma_quantiles.size() - 1);
-    cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
-      for (int r = rows.start; r < rows.end; ++r) {
-        float* s = speckle.ptr<float>(r);
-        for (int c = 0; c < laser.cols; ++c) {
-          const double x = std::clamp((s[c] * scale + kQuantileReach) * kQuantileStep, 0.0, last);
-          const auto i = std::min(static_cast<std::size_t>(x), gamma_quantiles.size() - 2);
-          const double f = x - static_cast<double>(i);
-          s[c] = static_cast<float>((1 - f) * gamma_quantiles[i] + f * gamma_quantiles[i + 1]);
+  // Catch pixels split by an edge.
+  cv::dilate(centre.near, centre.near, cv::Mat::ones(3, 3, CV_8U));
+  return centre;
+}
+
+// Whether the sheet's offset is linear over pixel (r, c): the same surface and slit, lit, not at
+// the slit's end (|t| <= t_inner) on the pixel and its four neighbours, and no curvature.
+inline bool offsetIsLinear(const CentreSamples& centre, int r, int c, double t_inner,
+                           double sigma) {
+  if (r < 1 || c < 1 || r >= centre.height - 1 || c >= centre.width - 1) return false;
+  const Shader::Sample& m = centre.at(r, c);
+  for (const Shader::Sample* q :
+       {&centre.at(r, c - 1), &centre.at(r, c + 1), &centre.at(r - 1, c), &centre.at(r + 1, c), &m})
+    if (q->object != m.object || q->slit != m.slit || !(q->radiance > 0) ||
+        std::abs(q->t) > t_inner)
+      return false;
+  return std::abs(centre.at(r, c - 1).offset + centre.at(r, c + 1).offset - 2 * m.offset) <
+             0.02 * sigma &&
+         std::abs(centre.at(r - 1, c).offset + centre.at(r + 1, c).offset - 2 * m.offset) <
+             0.02 * sigma;
+}
+
+// Laser light integrated over each pixel near a sheet: exactly where the sheet's offset is
+// linear over the pixel (same surface and slit, lit, not at the slit's end), else sampled at
+// n x n sub-pixel positions (edges, shadows, slit ends).
+cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double reach,
+                       double pixel) {
+  const int n = shader.render.supersample, width = centre.width, height = centre.height;
+  const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 3 * pixel;
+  cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      for (int c = 0; c < width; ++c) {
+        if (!centre.near.ptr<uchar>(r)[c]) continue;
+        const Shader::Sample& m = centre.at(r, c);
+        double value = 0;
+        if (offsetIsLinear(centre, r, c, t_inner, sigma)) {
+          const double gu = 0.5 * (centre.at(r, c + 1).offset - centre.at(r, c - 1).offset);
+          const double gv = 0.5 * (centre.at(r + 1, c).offset - centre.at(r - 1, c).offset);
+          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma * m.width);
+        } else {
+          for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+              value += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n,
+                                                 reach, m.object, m.albedo));
+          value /= n * n;
         }
+        laser.ptr<float>(r)[c] = static_cast<float>(value);
       }
-    });
-  }
-  laser = laser.mul(speckle);
+    }
+  });
+  return laser;
 }
 
 }  // namespace
@@ -218,7 +222,6 @@ RenderedFrame Simulator::renderReference(const Scene& floor,
 
 RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
                                 uint64_t frame) const {
-  const int width = geometry_.config().camera.width, height = geometry_.config().camera.height;
   const double sigma = geometry_.config().projector.sheet_sigma * render_.stripe_width,
                pixel = 1.0 / geometry_.config().camera.f();
   const Shader shader{scene,
@@ -228,102 +231,18 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
                       world_from_camera.translation(),
                       world_from_camera * geometry_.projectorCentre(),
                       sigma};
+  const double reach = sheetReach(scene, sigma, pixel);
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
-  double widest = scene.stripeWidth(0);  // the widest sheet on any surface
-  for (std::size_t k = 0; k < scene.objects.size(); ++k)
-    widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
-  // Beyond 4.5 sigma a sheet adds < 4e-5 of its peak.
-  const double reach = 4.5 * sigma * widest + 2 * pixel;
-  std::vector<Shader::Sample> centre(static_cast<std::size_t>(width) * height);
-  cv::Mat ambient(height, width, CV_32F), near(height, width, CV_8U);
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      for (int c = 0; c < width; ++c) {
-        const Shader::Sample& s = centre[static_cast<std::size_t>(r) * width + c] =
-            shader.trace(c, r, reach);
-        ambient.ptr<float>(r)[c] = static_cast<float>(render_.ambient * (s.albedo + s.glare));
-        near.ptr<uchar>(r)[c] =
-            std::abs(s.offset) < reach && std::abs(s.t) < geometry_.slitTMax() + 2 * pixel;
-      }
-    }
-  });
-  cv::dilate(near, near, cv::Mat::ones(3, 3, CV_8U));  // catch pixels split by an edge
-
-  // 2. Laser light integrated over each pixel near a sheet: exactly where the sheet's offset is
-  // linear over the pixel (same surface and slit, lit, not at the slit's end), else sampled
-  // at n x n sub-pixel positions (edges, shadows, slit ends).
-  const int n = render_.supersample;
-  const double t_inner = geometry_.slitTMax() - 3 * pixel;
-  cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
-  auto at = [&](int r, int c) -> const Shader::Sample& {
-    return centre[static_cast<std::size_t>(r) * width + c];
-  };
-  auto linear = [&](int r, int c) {
-    if (r < 1 || c < 1 || r >= height - 1 || c >= width - 1) return false;
-    const Shader::Sample& m = at(r, c);
-    for (const Shader::Sample* q : {&at(r, c - 1), &at(r, c + 1), &at(r - 1, c), &at(r + 1, c), &m})
-      if (q->object != m.object || q->slit != m.slit || !(q->radiance > 0) ||
-          std::abs(q->t) > t_inner)
-        return false;
-    return std::abs(at(r, c - 1).offset + at(r, c + 1).offset - 2 * m.offset) < 0.02 * sigma &&
-           std::abs(at(r - 1, c).offset + at(r + 1, c).offset - 2 * m.offset) < 0.02 * sigma;
-  };
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      for (int c = 0; c < width; ++c) {
-        if (!near.ptr<uchar>(r)[c]) continue;
-        const Shader::Sample& m = at(r, c);
-        double value = 0;
-        if (linear(r, c)) {
-          const double gu = 0.5 * (at(r, c + 1).offset - at(r, c - 1).offset);
-          const double gv = 0.5 * (at(r + 1, c).offset - at(r - 1, c).offset);
-          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma * m.width);
-        } else {
-          for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-              value += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n,
-                                                 reach, m.object, m.albedo));
-          value /= n * n;
-        }
-        laser.ptr<float>(r)[c] = static_cast<float>(value);
-      }
-    }
-  });
-
+  const CentreSamples centre = traceCentres(shader, reach, pixel);
+  // 2. Laser light integrated over each pixel near a sheet.
+  cv::Mat laser = integrateLaser(shader, centre, reach, pixel);
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
   if (render_.noise && render_.speckle_contrast > 0)
     applySpeckle(laser, render_, frame, gamma_quantiles_);
-
   // 4. Lens blur, then shot and read noise, saturation and quantization.
-  cv::Mat irradiance = ambient + laser;
-  if (render_.blur_sigma > 0)
-    cv::GaussianBlur(irradiance, irradiance, cv::Size(), render_.blur_sigma, render_.blur_sigma,
-                     cv::BORDER_REFLECT);
-  const double full = render_.bit_depth == 8 ? 255.0 : 65535.0;
   RenderedFrame out;
-  out.image.create(height, width, render_.bit_depth == 8 ? CV_8U : CV_16U);
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      RowRandom rng(render_.seed, frame, static_cast<uint64_t>(r), kSensorNoise);
-      const float* e = irradiance.ptr<float>(r);
-      for (int c = 0; c < width; ++c) {
-        double value = e[c];
-        if (render_.noise) {
-          const double noise = std::sqrt(std::max(value, 0.0) / render_.full_well +
-                                         render_.read_noise * render_.read_noise);
-          value += noise * rng.normal();
-        }
-        value = std::clamp(value, 0.0, 1.0);
-        if (render_.gamma != 1.0) value = std::pow(value, 1.0 / render_.gamma);
-        const double dn = std::round(value * full);
-        if (render_.bit_depth == 8)
-          out.image.ptr<uint8_t>(r)[c] = static_cast<uint8_t>(dn);
-        else
-          out.image.ptr<uint16_t>(r)[c] = static_cast<uint16_t>(dn);
-      }
-    }
-  });
+  out.image = exposeSensor(centre.ambient + laser, render_, frame);
   out.truth = groundTruth(scene, world_from_camera);
   return out;
 }

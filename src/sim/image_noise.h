@@ -1,0 +1,28 @@
+// The noise of the rendered image (private to the simulator): laser speckle, then the camera's
+// lens blur, shot and read noise and quantization. Each image row draws its own random stream,
+// so the bytes do not depend on how rows are shared between threads.
+#pragma once
+
+#include "multislit/sim/simulator.h"
+
+#include <opencv2/core/mat.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace multislit {
+
+/// The gamma speckle's intensity (mean 1) at each standard normal quantile of its table, for
+/// RenderConfig::speckle_contrast `contrast`.
+std::vector<float> gammaQuantiles(double contrast);
+
+/// Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel) of frame
+/// `frame`; `gamma_quantiles` from gammaQuantiles() for SpeckleModel::Gamma.
+void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
+                  const std::vector<float>& gamma_quantiles);
+
+/// The camera's image of `irradiance` (CV_32F) [FS]: lens blur, then shot and read noise,
+/// saturation and quantization to render.bit_depth (CV_8U or CV_16U).
+cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t frame);
+
+}  // namespace multislit
