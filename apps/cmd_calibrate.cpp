@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/reference.h"
 
@@ -94,6 +95,11 @@ int runCalibrate(int argc, char** argv) {
   const std::vector<std::string> ref_paths = args.list("reference");
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
+  std::vector<std::string> inputs = ref_paths;
+  for (const std::string& plane : args.list("plane"))
+    inputs.push_back(plane.substr(plane.find(':') + 1));
+  inputs.push_back(args.str("sensor"));
+  refuseOverwritingInputs(args.str("out"), inputs);
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
   const ReferenceConfig rc = referenceConfigFromArgs(args);
@@ -117,7 +123,16 @@ int runCalibrate(int argc, char** argv) {
     const PlaneImages plane_images = readPlanes(planes);
     fit_rms = ref.calibrateWithPlanes(plane_images.images, plane_images.depths, sensor.camera, rc);
   }
-  ref.save(args.str("out"));
+  // Whole or absent: written beside the output, read back (a full disk cuts it), then renamed.
+  OutputFile file(args.str("out"));
+  file.stream().close();
+  ref.save(file.temporaryPath().string());
+  try {
+    Reference::load(file.temporaryPath().string());
+  } catch (const std::exception& e) {
+    throw std::runtime_error("could not write all of " + args.str("out") + " (disk full?)");
+  }
+  file.commit();
 
   printCalibration(ref, ref_path, planes.size(), fit_rms);
   std::printf("\nwrote %s\n", args.str("out").c_str());

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
@@ -151,13 +152,18 @@ int runDetect(int argc, char** argv) {
   const ObstacleClusterer clusterer;  // grid groups, at least 3 points
   const bool raw = args.has("raw");
 
-  std::ofstream out(args.str("out"));
-  if (!out) throw std::runtime_error("cannot write '" + args.str("out") + "'");
   const std::vector<std::string>& frames = args.rest();
+  std::vector<std::string> inputs = frames;
+  for (const char* option : {"calibration", "reference", "sensor"})
+    inputs.push_back(args.str(option));
+  refuseOverwritingInputs(args.str("out"), inputs);
+  OutputFile file(args.str("out"));  // whole or absent: a bad frame leaves no partial JSONL
+  std::ofstream& out = file.stream();
+  const StopSignal stop;
   cli::Progress progress(frames.size(), "detect");
-  std::size_t found = 0, obstacles = 0, off_plane = 0, points = 0;
+  std::size_t found = 0, obstacles = 0, off_plane = 0, points = 0, done = 0;
   double total_ms = 0;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
+  for (std::size_t i = 0; i < frames.size() && !StopSignal::requested(); ++i, ++done) {
     const cv::Mat image = readMonoImage(frames[i]);
     const auto t0 = std::chrono::steady_clock::now();
     pcl::PointCloud<PointRDM>::Ptr cloud;
@@ -179,14 +185,15 @@ int runDetect(int argc, char** argv) {
     progress.update(i + 1);
   }
   progress.finish();
-  if (!out) throw std::runtime_error("could not write '" + args.str("out") + "' completely");
-  const double n = static_cast<double>(frames.size());
+  file.commit();  // flushed and checked: a full disk is an error, not an empty file
+  const double n = static_cast<double>(std::max<std::size_t>(done, 1));
   std::printf(
-      "%zu frames: floor found in %zu, %.0f points, %.1f off the plane and %.1f obstacle points "
+      "%zu frames%s: floor found in %zu, %.0f points, %.1f off the plane and %.1f obstacle points "
       "per frame, %.2f ms per frame (image to floor) -> %s\n",
-      frames.size(), found, static_cast<double>(points) / n, static_cast<double>(off_plane) / n,
-      static_cast<double>(obstacles) / n, total_ms / n, args.str("out").c_str());
-  return 0;
+      done, StopSignal::requested() ? " (interrupted)" : "", found, static_cast<double>(points) / n,
+      static_cast<double>(off_plane) / n, static_cast<double>(obstacles) / n, total_ms / n,
+      args.str("out").c_str());
+  return StopSignal::requested() ? kInterruptedExit : 0;
 }
 
 }  // namespace multislit::apps

@@ -1,13 +1,13 @@
 // multislit emulate: a GigE Vision camera on 127.0.0.1 serving the simulator's images of a walk.
 #include "cli.h"
 #include "commands.h"
+#include "output_file.h"
 
 #include "multislit/sim/camera_emulator.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
 
 #include <chrono>
-#include <csignal>
 #include <iostream>
 #include <stdexcept>
 #include <thread>
@@ -15,9 +15,6 @@
 
 namespace multislit::apps {
 namespace {
-
-volatile std::sig_atomic_t g_interrupted = 0;
-void onSignal(int) { g_interrupted = 1; }
 
 // --serial, --fps and --loss; a value out of range is a usage error.
 EmulatorConfig emulatorConfigFromArgs(const cli::ArgParser& args) {
@@ -58,7 +55,8 @@ void serve(const CameraEmulator& camera, std::chrono::steady_clock::time_point s
   for (;;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     const auto now = std::chrono::steady_clock::now();
-    if (g_interrupted || (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)))
+    if (StopSignal::requested() ||
+        (seconds > 0 && now - start >= std::chrono::duration<double>(seconds)))
       break;
     if (now - report >= std::chrono::seconds(5)) {
       const std::uint64_t served = camera.framesServed();
@@ -111,9 +109,7 @@ int runEmulate(int argc, char** argv) {
   const std::vector<cv::Mat> images = renderWalk(sim, scenario, frames);
 
   CameraEmulator camera(images, config);
-  g_interrupted = 0;
-  auto previous_int = std::signal(SIGINT, onSignal);
-  auto previous_term = std::signal(SIGTERM, onSignal);
+  const StopSignal stop;  // Ctrl-C and SIGTERM end the serving
   std::cout << "GigE Vision camera " << CameraEmulator::kAddress << " (serial " << config.serial
             << "): " << images.front().cols << "x" << images.front().rows << " Mono"
             << render.bit_depth << ", " << frames << " frames of scenario " << scenario.name
@@ -125,8 +121,6 @@ int runEmulate(int argc, char** argv) {
 
   const auto start = std::chrono::steady_clock::now();
   serve(camera, start, seconds);
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
   std::cout << "served " << camera.framesServed() << " frames in "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
             << " s\n";

@@ -4,6 +4,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "map_outputs.h"
+#include "output_file.h"
 
 #include "multislit/extractor.h"
 #include "multislit/gait.h"
@@ -14,9 +15,7 @@
 
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -25,9 +24,6 @@
 
 namespace multislit::apps {
 namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void onStopSignal(int) { g_stop = true; }
 
 void declareOptions(cli::ArgParser& args) {
   args.option("camera", "", "GigE Vision camera address (127.0.0.1 for multislit emulate)");
@@ -183,7 +179,8 @@ FrameCounts processFrames(FrameSource& source, const Extractor& extractor, Poses
                           std::chrono::steady_clock::time_point t0) {
   FrameCounts n;
   source.start();
-  while (!g_stop && (max_frames == 0 || static_cast<long>(n.processed) < max_frames)) {
+  while (!StopSignal::requested() &&
+         (max_frames == 0 || static_cast<long>(n.processed) < max_frames)) {
     const std::optional<Frame> frame = source.next(std::chrono::milliseconds(200));
     if (!frame) {
       if (source.finished()) break;
@@ -232,6 +229,7 @@ int runMap(int argc, char** argv) {
       "  multislit map --sequence rec --calibration rec/calibration.yaml --out out/map");
   declareOptions(args);
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);
   Input in = openInput(args);
   PipelineConfig config;
@@ -241,15 +239,10 @@ int runMap(int argc, char** argv) {
   const Extractor extractor(in.reference);
   MapRecorder recorder(args.str("out"));
 
-  g_stop = false;
-  auto previous_int = std::signal(SIGINT, onStopSignal);
-  auto previous_term = std::signal(SIGTERM, onStopSignal);
   const auto t0 = std::chrono::steady_clock::now();
   const FrameCounts counts =
       processFrames(*in.source, extractor, poses, pipeline, recorder, max_frames, t0);
   in.source->stop();
-  std::signal(SIGINT, previous_int);
-  std::signal(SIGTERM, previous_term);
   if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -260,10 +253,10 @@ int runMap(int argc, char** argv) {
       "multislit map: " + in.description + " (stamps: " + stamps + "), poses from " +
       poses.description() +
       (counts.bad_frames ? ", " + std::to_string(counts.bad_frames) + " bad frames" : "");
-  std::cout << recorder.finish(pipeline, heading, seconds, g_stop);
+  std::cout << recorder.finish(pipeline, heading, seconds, StopSignal::requested());
   if (counts.processed == 0 && counts.bad_frames > 0)
     throw std::runtime_error("no frame could be measured with this calibration");
-  return g_stop ? 130 : 0;
+  return StopSignal::requested() ? kInterruptedExit : 0;
 }
 
 }  // namespace multislit::apps

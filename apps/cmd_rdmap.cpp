@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/extractor.h"
 
@@ -40,10 +41,28 @@ int runRdmap(int argc, char** argv) {
   const std::vector<std::string>& images = args.rest();
   const std::filesystem::path out = args.str("out");
   const bool to_folder = images.size() > 1 || (!out.empty() && std::filesystem::is_directory(out));
+  // Where each cloud goes: IMAGE.pcd, --out, or --out/IMAGE.pcd; none may replace an input, nor
+  // two the same file.
+  std::vector<std::filesystem::path> targets;
+  for (const std::string& image : images) {
+    std::filesystem::path target = image;
+    target.replace_extension(".pcd");
+    if (to_folder && !out.empty())
+      target = out / target.filename();
+    else if (!out.empty())
+      target = out;
+    targets.push_back(target);
+  }
+  refuseSameOutputTwice(targets, images);
+  std::vector<std::string> inputs = images;
+  inputs.push_back(args.str("calibration"));
+  inputs.push_back(args.str("sensor"));
+  for (const auto& target : targets) refuseOverwritingInputs(target, inputs);
   if (to_folder && !out.empty()) std::filesystem::create_directories(out);
 
+  const StopSignal stop;
   cli::Progress progress(images.size(), "rdmap");
-  for (std::size_t i = 0; i < images.size(); ++i) {
+  for (std::size_t i = 0; i < images.size() && !StopSignal::requested(); ++i) {
     const std::filesystem::path in = images[i];
     const cv::Mat image = readMonoImage(in.string());
     pcl::PointCloud<PointRDM> cloud;
@@ -56,20 +75,18 @@ int runRdmap(int argc, char** argv) {
     cloud.header.frame_id = ec.frame_id;
     cloud.header.seq = static_cast<std::uint32_t>(i);
     if (robot) pcl::transformPointCloud(cloud, cloud, robot_from_camera);
-    std::filesystem::path target = in;
-    target.replace_extension(".pcd");
-    if (to_folder && !out.empty())
-      target = out / target.filename();
-    else if (!out.empty())
-      target = out;
-    if (pcl::io::savePCDFileBinary(target.string(), cloud) != 0)
+    const std::filesystem::path& target = targets[i];
+    OutputFile file(target);  // whole or absent
+    file.stream().close();
+    if (pcl::io::savePCDFileBinary(file.temporaryPath().string(), cloud) != 0)
       throw std::runtime_error("cannot write '" + target.string() + "'");
+    file.commit();
     if (images.size() <= 20)
       std::printf("%s: %zu of %zu points -> %s\n", in.string().c_str(), stats.valid,
                   stats.reference_points, target.string().c_str());
     progress.update(i + 1);
   }
-  return 0;
+  return StopSignal::requested() ? kInterruptedExit : 0;
 }
 
 }  // namespace multislit::apps

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/odometry.h"
 #include "multislit/sim/photometry.h"
@@ -98,9 +99,12 @@ Photometry photometryFromArgs(const cli::ArgParser& args, uint64_t seed, Scene& 
 
 // The sequence: frame_NNNNNN.png and .csv (ground truth) per frame, frames.csv (index and
 // poses) and odometry.csv in `out`. Returns the number of slit crossings in all frames.
+/// The sequence's frames, ground truth, frames.csv and odometry.csv; Ctrl-C ends it after a whole
+/// frame, with both index files listing exactly the frames written. Returns the crossings.
 std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long frames, double fps,
                           const std::filesystem::path& out) {
-  std::ofstream index(out / "frames.csv");
+  OutputFile index_file(out / "frames.csv");
+  std::ofstream& index = index_file.stream();
   index << "frame,file,stamp_us,robot_x,camera_x,camera_y,camera_z,tilt,roll,height\n";
   const auto stamp0 = std::chrono::duration_cast<std::chrono::microseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
@@ -108,7 +112,7 @@ std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long f
   cli::Progress progress(static_cast<std::size_t>(frames), "simulate");
   std::size_t crossings = 0;
   std::vector<OdometrySample> odometry;  // the robot at each frame's stamp (multislit map)
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const auto frame = static_cast<uint64_t>(k);
     const Eigen::Isometry3d world_from_camera =
         scenario.worldFromRobot(frame) * sim.geometry().robotFromCamera(scenario.mount);
@@ -128,6 +132,7 @@ std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long f
     progress.update(static_cast<std::size_t>(k + 1));
   }
   progress.finish();
+  index_file.commit();
   if (!odometry.empty()) saveOdometry((out / "odometry.csv").string(), odometry);
   return crossings;
 }
@@ -145,6 +150,7 @@ int runSimulate(int argc, char** argv) {
                           "\nor the photometry.yaml of an earlier run");
   addSimulateOptions(args);
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C: the sequence ends after a whole frame
 
   Scenario scenario = scenarioFromArgs(args);
   SensorConfig sensor =
@@ -190,7 +196,8 @@ int runSimulate(int argc, char** argv) {
             << "  sequence:  " << (out / "frame_*.png").string() << ", index in "
             << (out / "frames.csv").string() << ", poses in " << (out / "odometry.csv").string()
             << "\n";
-  return 0;
+  if (StopSignal::requested()) std::cout << "interrupted (Ctrl-C): the frames above are whole\n";
+  return StopSignal::requested() ? kInterruptedExit : 0;
 }
 
 }  // namespace multislit::apps

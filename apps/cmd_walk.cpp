@@ -5,6 +5,7 @@
 #include "commands.h"
 #include "common.h"
 #include "multislit/units.h"
+#include "output_file.h"
 #include "plot.h"
 #include "recording.h"
 #include "walk_figures.h"
@@ -89,7 +90,7 @@ struct ObjectRecord {
 
 /// Everything the outputs need, gathered frame by frame.
 struct Recorder {
-  std::ofstream csv;
+  std::ostream* csv = nullptr;  ///< obstacles.csv, one row per frame
   std::map<std::string, ObjectRecord> objects;
   std::vector<std::string> events;
   TopViewContent top;
@@ -163,13 +164,13 @@ std::string describeMotion(const WalkFrame& f, const std::vector<SceneObject>& o
   return "stops";
 }
 
-void writeCsvHeader(std::ofstream& csv) {
+void writeCsvHeader(std::ostream& csv) {
   csv << "frame,time_s,x_m,y_m,yaw_deg,decision,reason,motion,floor_found,valid_points,"
          "floor_std_px,obstacle_points,obstacles,nearest_m,map_occupied,map_voxels,map_bytes,"
          "ball_lit,ball_detected,cable_lit,cable_detected,footstep,footstep_clearance_m\n";
 }
 
-void writeCsvLine(std::ofstream& csv, const WalkFrame& f, const OccupancyMap& map, double fps) {
+void writeCsvLine(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map, double fps) {
   std::size_t lit[2] = {0, 0}, detected[2] = {0, 0};
   for (const ObjectView& o : f.objects) {
     const int k = o.object.name == "pingpong_ball" ? 0 : o.object.name == "lan_cable" ? 1 : -1;
@@ -195,7 +196,7 @@ void writeCsvLine(std::ofstream& csv, const WalkFrame& f, const OccupancyMap& ma
 
 void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
   const int k = static_cast<int>(f.frame);
-  writeCsvLine(r.csv, f, walk.map(), walk.config().gait.frame_rate);
+  writeCsvLine(*r.csv, f, walk.map(), walk.config().gait.frame_rate);
   r.obstacle_points.push_back(static_cast<double>(f.obstacles.pointCount()));
   r.measure_s += f.measure_seconds;
   r.process_s += f.process_seconds;
@@ -346,6 +347,7 @@ int runWalk(int argc, char** argv) {
       "image -> RDMap -> floor (RANSAC) -> obstacles -> OctoMap -> footsteps -> walk/turn/stop.");
   declareOptions(args);
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C: the walk ends at a frame boundary, every output written
   const WalkConfig config = configFromArgs(args);
   const long frames = args.integer("frames", 1, 100000000);
   const std::filesystem::path out = args.str("out");
@@ -354,16 +356,16 @@ int runWalk(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   WalkSimulation walk(config);
   Recorder r;
-  r.csv.open(out / "obstacles.csv");
-  if (!r.csv) throw std::runtime_error("cannot write " + (out / "obstacles.csv").string());
-  writeCsvHeader(r.csv);
+  OutputFile csv(out / "obstacles.csv");  // whole or absent, as every output
+  r.csv = &csv.stream();
+  writeCsvHeader(*r.csv);
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
     recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor);
   }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const WalkFrame f = walk.step();
     if (recording) recording->add(f.image, f.stamp_us, f.world_from_torso);
     record(r, f, walk);
@@ -372,14 +374,20 @@ int runWalk(int argc, char** argv) {
   }
   progress.finish();
   if (recording) recording->finish();
-  r.csv.close();
+  csv.commit();
   writeFigures(r, walk, out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::string text = summary(r, walk, seconds, out.string());
-  std::ofstream(out / "summary.txt") << text;
+  const std::string text =
+      summary(r, walk, seconds, out.string()) +
+      (StopSignal::requested() ? "interrupted (Ctrl-C) at frame " + std::to_string(walk.frame()) +
+                                     " of " + std::to_string(frames) + "\n"
+                               : "");
+  OutputFile summary_file(out / "summary.txt");
+  summary_file.stream() << text;
+  summary_file.commit();
   std::cout << text;
-  return 0;
+  return StopSignal::requested() ? kInterruptedExit : 0;
 }
 
 }  // namespace multislit::apps

@@ -2,6 +2,9 @@
 
 #include <unistd.h>
 
+#include <atomic>
+#include <csignal>
+
 #include <map>
 #include <stdexcept>
 #include <system_error>
@@ -19,18 +22,42 @@ fs::path resolved(const fs::path& path) {
   return error ? fs::absolute(path).lexically_normal() : p;
 }
 
+std::atomic<bool> g_stop_requested{false};
+extern "C" void onStopSignal(int) { g_stop_requested = true; }
+using Handler = void (*)(int);
+Handler g_previous_int = SIG_DFL, g_previous_term = SIG_DFL;
+
 }  // namespace
+
+StopSignal::StopSignal() {
+  g_stop_requested = false;
+  g_previous_int = std::signal(SIGINT, onStopSignal);
+  g_previous_term = std::signal(SIGTERM, onStopSignal);
+}
+
+StopSignal::~StopSignal() {
+  std::signal(SIGINT, g_previous_int);
+  std::signal(SIGTERM, g_previous_term);
+}
+
+bool StopSignal::requested() { return g_stop_requested; }
 
 OutputFile::OutputFile(fs::path path) : path_(std::move(path)) {
   const fs::path folder = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
-  temporary_ = folder / ("." + path_.filename().string() + ".part-" + std::to_string(::getpid()));
+  std::error_code error;
+  const fs::file_status status = fs::status(path_, error);
+  // A device or a pipe (/dev/stdout, /dev/full) is written in place: it cannot be replaced.
+  direct_ = fs::exists(status) && !fs::is_regular_file(status);
+  temporary_ =
+      direct_ ? path_
+              : folder / ("." + path_.filename().string() + ".part-" + std::to_string(::getpid()));
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
   if (!out_)
     throw std::runtime_error("cannot write " + path_.string() + " (in " + folder.string() + ")");
 }
 
 OutputFile::~OutputFile() {
-  if (committed_) return;
+  if (committed_ || direct_) return;
   out_.close();
   std::error_code ignored;
   fs::remove(temporary_, ignored);

@@ -12,7 +12,8 @@ namespace multislit::apps {
 
 /// A file written whole or not at all. Write to stream(); commit() makes it appear under its
 /// name (throws std::runtime_error naming it when the disk is full or it cannot be written);
-/// destroyed without commit() (an error, Ctrl-C between frames), the temporary file goes.
+/// destroyed without commit() (an error), the temporary file goes. A device or a pipe
+/// (/dev/stdout) is written in place, its write errors reported by commit() all the same.
 class OutputFile {
  public:
   explicit OutputFile(std::filesystem::path path);
@@ -31,8 +32,22 @@ class OutputFile {
  private:
   std::filesystem::path path_, temporary_;
   std::ofstream out_;
+  bool direct_ = false;  ///< a device or pipe, written in place
   bool committed_ = false;
 };
+
+/// Ends a long run at a frame boundary on SIGINT or SIGTERM: while one lives, the signals set a
+/// flag that requested() reads, and the previous handlers come back when it goes. Commands then
+/// write every output whole and exit with kInterruptedExit.
+class StopSignal {
+ public:
+  StopSignal();
+  ~StopSignal();
+  StopSignal(const StopSignal&) = delete;
+  StopSignal& operator=(const StopSignal&) = delete;
+  static bool requested();
+};
+inline constexpr int kInterruptedExit = 130;  ///< 128 + SIGINT, as shells report it
 
 /// Throws std::runtime_error when `output` names the same file as one of `inputs` (after
 /// resolving links and relative paths): writing it would destroy that input.

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# outputs_check: no output clobbers an input, and every output is whole or absent (issue 15).
+#  - an output equal to an input, or two outputs of one name: refused, the input unchanged;
+#  - a full disk (/dev/full, a file-size limit): a non-zero exit and no cut file;
+#  - SIGINT in a long detect, walk or simulate: rc 130 at a frame boundary, every file whole.
+# Run as: bash outputs_check.sh <multislit> <work dir>
+set -u
+M=$1
+work=$2
+rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+refused() {  # refused EXPECTED_MESSAGE COMMAND...: the command fails saying so
+  local expect=$1
+  shift
+  if "$@" >out.log 2>&1; then fail "accepted: $*"; fi
+  grep -q -- "$expect" out.log || fail "$*: $(cat out.log)"
+}
+"$M" simulate --scenario cable --frames 2 --out s >/dev/null 2>&1 || fail "simulate"
+"$M" calibrate --reference s/reference.png --out c.yaml >/dev/null 2>&1 || fail "calibrate"
+cp s/frame_000001.png f.png && cp f.png f.orig.png && cp c.yaml c.orig.yaml
+
+# 1. Inputs are never overwritten.
+refused "is the input f.png" "$M" detect --calibration c.yaml --out f.png f.png
+refused "is the input c.yaml" "$M" detect --calibration c.yaml --out c.yaml f.png
+refused "is the input f.png" "$M" rdmap --calibration c.yaml --out ./f.png f.png
+refused "is the input s/reference.png" "$M" calibrate --reference s/reference.png \
+  --out s/reference.png
+cmp -s f.png f.orig.png && cmp -s c.yaml c.orig.yaml || fail "an input was changed"
+mkdir -p a b && cp f.png a/ && cp f.png b/
+refused "would both be written to D/f.pcd" "$M" rdmap --calibration c.yaml --out D a/f.png b/f.png
+[[ ! -e D/f.pcd ]] || fail "rdmap wrote D/f.pcd anyway"
+echo "inputs: 5 clobbering commands refused, inputs unchanged"
+
+# 2. A full disk is an error, and leaves nothing cut.
+refused "could not write all of /dev/full" "$M" detect --calibration c.yaml --out /dev/full f.png
+(trap '' XFSZ; ulimit -f 8; "$M" calibrate --reference s/reference.png --out big.yaml) \
+  >out.log 2>&1 && fail "calibrate on a full disk reported success"
+[[ ! -e big.yaml ]] || fail "a cut big.yaml was left"
+frames=()
+for _ in $(seq 1 40); do frames+=(f.png); done
+(trap '' XFSZ; ulimit -f 8; "$M" detect --calibration c.yaml --raw --out big.jsonl "${frames[@]}") \
+  >out.log 2>&1 && fail "detect on a full disk reported success"
+[[ ! -e big.jsonl ]] || fail "a cut big.jsonl was left"
+[[ -z $(ls -A . | grep '\.part-') ]] || fail "temporary files left: $(ls -A | grep part)"
+echo "full disk: calibrate and detect fail, no output left"
+
+# interrupt NAME SECONDS COMMAND...: SIGINT after SECONDS; the command must exit with 130.
+interrupt() {
+  local name=$1 seconds=$2
+  shift 2
+  "$@" >"$name.log" 2>&1 &
+  local pid=$!
+  sleep "$seconds"
+  kill -INT $pid
+  wait $pid
+  local rc=$?
+  [[ $rc == 130 ]] || fail "$name after SIGINT: rc $rc, not 130: $(tail -3 "$name.log")"
+}
+whole_lines() {  # whole_lines FILE FIELDS: every row has FIELDS commas-separated fields
+  [[ -s $1 && $(tail -c 1 "$1" | od -An -c | tr -d ' ') == '\n' ]] || fail "$1 is cut or empty"
+  awk -F, -v n="$2" 'NF != n { exit 1 }' "$1" || fail "$1 has a cut row"
+}
+
+# 3. SIGINT.
+frames=()
+for _ in $(seq 1 3000); do frames+=(f.png); done
+interrupt detect 2 "$M" detect --calibration c.yaml --out d.jsonl "${frames[@]}"
+[[ -e d.jsonl ]] || fail "no d.jsonl after SIGINT"
+[[ ! -s d.jsonl || $(tail -c 1 d.jsonl | od -An -c | tr -d ' ') == '\n' ]] || fail "d.jsonl is cut"
+grep -qv '}$' d.jsonl && fail "a JSON line is cut"
+echo "detect: interrupted after $(wc -l <d.jsonl) whole lines"
+interrupt walk 4 "$M" walk --synthesize --frames 100000 --out w
+whole_lines w/obstacles.csv 23
+grep -q "interrupted (Ctrl-C) at frame" w/summary.txt || fail "walk: no summary"
+[[ -s w/map.bt && -s w/map_top.png ]] || fail "walk: no map"
+echo "walk: interrupted after $(($(wc -l <w/obstacles.csv) - 1)) whole rows, summary and map"
+interrupt simulate 4 "$M" simulate --scenario floor --frames 10000 --out sim
+whole_lines sim/frames.csv 10
+pngs=$(ls sim/frame_*.png | wc -l)
+[[ $(($(wc -l <sim/frames.csv) - 1)) == "$pngs" ]] || fail "frames.csv does not list the $pngs PNGs"
+whole_lines sim/odometry.csv 7
+echo "simulate: interrupted after $pngs frames, frames.csv and odometry.csv whole"
+echo "outputs_check: all checks passed"
