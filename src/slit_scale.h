@@ -23,11 +23,11 @@ struct SlitScaleOff {
 
 /// Among `candidates` (cloud indices of the floor points of an organized RDMap: cloud row = slit,
 /// column = position along it), the points whose window of w rows (w = min_window, 2 w + 1, ...
-/// up to `max_window`, centred on the point, over the candidates only) has a median residual
-/// farther from 0 than `sigmas` times that window length's noise and than `min_shift`, with the
-/// point's own residual on the same side.
-/// The noise of each window length is measured on the frame: 1.4826 x the median |median| over
-/// all candidates, so the correlation along a slit is measured, not assumed. Nothing when the
+/// up to `max_window`, centred on the point, over the candidates only, at least half of it
+/// candidates) has more than half of its candidates (its median) beyond `sigmas` times that
+/// window length's noise and beyond `min_shift`, on the side of the point's own residual. The
+/// noise of each window length is measured on the frame: 1.4826 x the median |window median| over
+/// the candidates, so the correlation along a slit is measured, not assumed. Nothing when the
 /// cloud is not organized.
 SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
                               const pcl::Indices& candidates, const Eigen::Vector3d& plane,
