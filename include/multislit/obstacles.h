@@ -45,6 +45,10 @@ struct ObstacleClustererConfig {
   /// and the grid grouping's gaps of up to max_gap rows would otherwise chain it into groups.
   /// 1: no such rule.
   int min_run = 3;  ///< [points]
+  /// The run of min_run rows must lie on one side of the floor: an object lifts (or a hole sinks)
+  /// every point of its run, while noise that passes the threshold above and below the floor on
+  /// neighbouring rows is no surface.
+  bool run_one_side = true;
   /// The feet, seen from above in the robot frame: |x| <= feet_half_length, |y| <=
   /// feet_half_width. Obstacle::distance is measured from this rectangle. Defaults: the HOAP-2
   /// sole (95 x 65 mm), feet 78 mm apart, the leading foot half a 40 mm step ahead.
