@@ -4,6 +4,7 @@
 
 #include "config_check.h"
 #include "rdm_simd.h"
+#include "slit_scale.h"
 
 #include <algorithm>
 #include <array>
@@ -209,6 +210,37 @@ void adoptFrameNoise(SampleConsensusModelRDMapPlane& model, const FloorDetectorC
   if (refit.ok) fit = refit;
 }
 
+/// Step 6: the floor points that their windows of rows put off the floor become obstacles.
+void addRunObstacles(const pcl::PointCloud<PointRDM>& cloud, const FloorDetectorConfig& config,
+                     FloorResult& result) {
+  detail::SlitScaleOff off =
+      detail::offFloorAtScales(cloud, result.inliers, result.plane, config.min_window,
+                               config.max_window, config.window_sigmas, config.min_window_shift);
+  result.window_noise = std::move(off.sigmas);
+  if (off.points.empty()) return;
+  // Both lists in the order of the inliers: one pass takes them out.
+  std::size_t next = 0, kept = 0;
+  double removed_sq = 0.0;
+  for (const auto i : result.inliers) {
+    if (next < off.points.size() && off.points[next] == i) {
+      removed_sq += static_cast<double>(off.residuals[next]) * off.residuals[next];
+      ++next;
+      continue;
+    }
+    result.inliers[kept++] = i;
+  }
+  const double floor_sq =
+      result.residual_std * result.residual_std * static_cast<double>(result.inliers.size());
+  result.inliers.resize(kept);
+  if (kept > 0)
+    result.residual_std =
+        std::sqrt(std::max(0.0, floor_sq - removed_sq) / static_cast<double>(kept));
+  result.obstacles.insert(result.obstacles.end(), off.points.begin(), off.points.end());
+  result.obstacle_residuals.insert(result.obstacle_residuals.end(), off.residuals.begin(),
+                                   off.residuals.end());
+  result.run_obstacles = off.points.size();
+}
+
 FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetectorConfig& config,
                        int q) {
   FloorResult result;
@@ -242,6 +274,9 @@ FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetecto
     return not_found;
   }
   result.found = true;
+
+  // 6. Runs along the slits: floor points whose window of rows lies off the floor.
+  if (config.multiscale) addRunObstacles(*model.getInputCloud(), config, result);
   return result;
 }
 
@@ -275,6 +310,11 @@ void FloorDetectorConfig::validate() const {
   require(outlier_ratio >= 0.0 && outlier_ratio < 1.0, "outlier_ratio", "must be in [0, 1)");
   require(max_iterations >= 0, "max_iterations", "must be >= 0 (0: from eq. 3)");
   require(min_points >= 3, "min_points", "must be >= 3 (a plane needs three points)");
+  require(min_window >= 3 && min_window % 2 == 1, "min_window", "must be odd and >= 3 rows");
+  require(max_window >= min_window, "max_window", "must be >= min_window rows");
+  require(window_sigmas > 0.0 && std::isfinite(window_sigmas), "window_sigmas", "must be > 0");
+  require(min_window_shift >= 0.0 && std::isfinite(min_window_shift), "min_window_shift",
+          "must be >= 0 [px]");
   require(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0, "min_inlier_ratio",
           "must be in [0, 1]");
 }

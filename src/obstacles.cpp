@@ -156,14 +156,21 @@ ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config, cons
 namespace {
 
 /// The most points of one slit (one cloud row of `width`) on neighbouring rows, a gap of one
-/// row allowed, in a group.
-int longestRun(pcl::Indices group, std::uint32_t cloud_width) {
-  const auto width = static_cast<pcl::index_t>(cloud_width);
+/// row allowed, in a group; with `plane` (A, B, C) given, only points on one side of it (the sign
+/// of dk - (A u + B v + C)) make a run.
+int longestRun(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices group,
+               const Eigen::Vector3d* plane) {
+  const auto width = static_cast<pcl::index_t>(cloud.width);
   std::sort(group.begin(), group.end());
+  const auto above = [&](pcl::index_t i) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    return p.dk > (*plane)[0] * p.u + (*plane)[1] * p.v + (*plane)[2];
+  };
   int best = 0, run = 0;
   for (std::size_t i = 0; i < group.size(); ++i) {
-    const bool continues =
-        i > 0 && group[i] / width == group[i - 1] / width && group[i] - group[i - 1] <= 2;
+    const bool continues = i > 0 && group[i] / width == group[i - 1] / width &&
+                           group[i] - group[i - 1] <= 2 &&
+                           (!plane || above(group[i]) == above(group[i - 1]));
     run = continues ? run + 1 : 1;
     best = std::max(best, run);
   }
@@ -186,7 +193,8 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
   // Reject groups too small to be real, then size and place the others.
   for (const pcl::Indices& group : groups) {
     if (group.size() < static_cast<std::size_t>(config_.min_points) ||
-        longestRun(group, cloud->width) < config_.min_run) {
+        longestRun(*cloud, group, config_.run_one_side ? &floor.plane : nullptr) <
+            config_.min_run) {
       ++result.rejected_groups;
       result.rejected.insert(result.rejected.end(), group.begin(), group.end());
       continue;

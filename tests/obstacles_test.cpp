@@ -163,6 +163,35 @@ TEST(ObstacleClusterer, IsolatedPointsAreRejectedThreeInARowAreKept) {
   EXPECT_EQ(r.obstacles[0].pointCount(), 3u);
 }
 
+TEST(ObstacleClusterer, ARunLiesOnOneSideOfTheFloor) {
+  Seen s = look(Scene{}, ClusterMethod::Grid);
+  ASSERT_TRUE(s.floor.found);
+  ASSERT_TRUE(s.obstacles.obstacles.empty());
+  // Three neighbouring rows of one slit off the floor by +3, -3 and +3 px: noise, not a surface.
+  const int w = static_cast<int>(s.cloud->width);
+  for (int k = 0; k < 3; ++k) {
+    PointRDM& p = s.cloud->at(w / 2 + k, 7);
+    ASSERT_TRUE(std::isfinite(p.dk)) << k;
+    p.dk += k == 1 ? -3.0f : 3.0f;
+  }
+  s.floor = FloorDetector().detect(s.cloud);
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(MountConfig{});
+  ObstacleResult r = ObstacleClusterer().cluster(s.cloud, s.floor, pose);
+  EXPECT_TRUE(r.obstacles.empty());
+  EXPECT_EQ(r.rejected_groups, 1u);
+  EXPECT_EQ(r.rejected.size(), 3u);
+  ObstacleClustererConfig any_side;
+  any_side.run_one_side = false;
+  r = ObstacleClusterer(any_side).cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 3u);
+  s.cloud->at(w / 2 + 1, 7).dk += 6.0f;  // now +3, +3, +3: a surface
+  s.floor = FloorDetector().detect(s.cloud);
+  r = ObstacleClusterer().cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 3u);
+}
+
 TEST(ObstacleClusterer, MetricFloorIsTheFloorUnderTheSensor) {
   const Seen s = look(Scene{}, ClusterMethod::Grid);
   ASSERT_TRUE(s.obstacles.floor.valid);

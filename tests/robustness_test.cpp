@@ -117,8 +117,7 @@ Tally runVariant(int index, Kind kind) {
   const SensorConfig sensor;
   const Simulator sim(sensor, applyPhotometry(photometry, bare));
   const MountConfig reference_mount = tableIPose(0), mount = tableIPose(index % 7);
-  const cv::Mat reference_image =
-      sim.render(bare, sim.geometry().robotFromCamera(reference_mount), 1u << 30).image;
+  const cv::Mat reference_image = sim.renderReference(bare, reference_mount).image;
   Tally tally;
   Reference ref;
   try {
@@ -172,10 +171,18 @@ Tally runVariant(int index, Kind kind) {
 // the ball, the cable and a screw at the seven poses of Table I.
 //
 // What holds today is asserted; the targets that do not (recall of >= 5 mm crossings
-// 0.98 and false points 0.1 % over every photometry) are printed and left to the README's table:
-// under strong speckle the frame's sigma reaches 1 px (the estimate's bound), and on tiles a slit
-// lying along a dark grout line is shifted over dozens of rows, which no rule on geometry alone
-// tells from an object.
+// 0.98 and false points 0.1 % over every photometry) are printed and left to the README's table.
+// FloorDetector's windows along the slits (step 6) find the low cable that the 3 px threshold of a
+// 1 px frame hides: recall 0.749 -> 0.851 over the 40 (0.489 -> 0.739 at sigma 0.7 - 1, the 15
+// quiet variants unchanged at 0.962), false points 4.28 % -> 4.45 % of valid (the paper's method
+// 16.6 %); a noise run must lie on one side of the floor (ObstacleClustererConfig::run_one_side),
+// which takes 0.08 % of the false points and 4 of the 26 groups on the 10 empty floors, without a
+// crossing lost. Of the 136 crossings still missed, 94 were not measured at all (a dark, wide
+// stripe on the object); most of the rest lie on tiles under strong speckle (variant 6). The false
+// points are the floor's own shifts: under strong speckle the frame's noise exceeds the 1 px bound
+// (variants 0 and 25 measure 3 px), and on tiles or grainy wood a slit lying along a dark grout
+// line or grain is shifted over dozens of rows, which no rule on geometry alone tells from an
+// object.
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   const int variants = frameCount(40, 8);
   Tally all, quiet;  // quiet: the frames whose sigma is the paper's 0.3 px or near it
@@ -213,5 +220,11 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   EXPECT_LE(all.false_points * 3, all.paper_false);  // a third of the paper's false points or less
   // 0.962 over the 15 quiet variants of 40; under the sanitizers one of 8 (variant 5: 58 of 63).
   EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 90 : 95));
+  // 0.851 over all 40 (0.749 without the windows along the slits); 0.818 over the first 8.
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 80 : 84));
+  // 4.45 % of valid over all 40 (4.28 % before the windows and the one-sided runs).
+  if (!kSanitized) {
+    EXPECT_LE(all.false_points * 1000, all.valid * 46);
+  }
   EXPECT_LE(quiet.false_points * 100, quiet.valid * 3);
 }

@@ -45,7 +45,12 @@ struct ObstacleClustererConfig {
   /// allowed): an object lifts a run of rows, while noise that passes the threshold is scattered,
   /// and the grid grouping's gaps of up to max_gap rows would otherwise chain it into groups.
   /// 1: no such rule.
-  int min_run = 3;        ///< [points]
+  int min_run = 3;  ///< [points]
+  /// The run of min_run rows must lie on one side of the floor: an object lifts (or a hole sinks)
+  /// every point of its run, while noise that passes the threshold above and below the floor on
+  /// neighbouring rows is no surface.
+  bool run_one_side = true;
+
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
