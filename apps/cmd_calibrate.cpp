@@ -66,6 +66,28 @@ void printCalibration(const Reference& ref, const std::string& ref_path, std::si
   if (planes > 0) std::printf(", fit rms %.3f px over %zu planes", fit_rms, planes);
 }
 
+// Every file calibrate reads: the reference images, the plane images and the sensor file.
+std::vector<std::string> inputsOf(const cli::ArgParser& args) {
+  std::vector<std::string> inputs = args.list("reference");
+  for (const std::string& plane : args.list("plane"))
+    inputs.push_back(plane.substr(plane.find(':') + 1));
+  inputs.push_back(args.str("sensor"));
+  return inputs;
+}
+
+// Whole or absent: written beside `path`, read back (a full disk cuts it), then renamed.
+void writeCalibration(const Reference& ref, const std::string& path) {
+  OutputFile file(path);
+  file.stream().close();
+  ref.save(file.temporaryPath().string());
+  try {
+    Reference::load(file.temporaryPath().string());
+  } catch (const std::exception&) {
+    throw std::runtime_error("could not write all of " + path + " (disk full?)");
+  }
+  file.commit();
+}
+
 }  // namespace
 
 int runCalibrate(int argc, char** argv) {
@@ -95,11 +117,7 @@ int runCalibrate(int argc, char** argv) {
   const std::vector<std::string> ref_paths = args.list("reference");
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
-  std::vector<std::string> inputs = ref_paths;
-  for (const std::string& plane : args.list("plane"))
-    inputs.push_back(plane.substr(plane.find(':') + 1));
-  inputs.push_back(args.str("sensor"));
-  refuseOverwritingInputs(args.str("out"), inputs);
+  refuseOverwritingInputs(args.str("out"), inputsOf(args));
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
   const ReferenceConfig rc = referenceConfigFromArgs(args);
@@ -123,16 +141,7 @@ int runCalibrate(int argc, char** argv) {
     const PlaneImages plane_images = readPlanes(planes);
     fit_rms = ref.calibrateWithPlanes(plane_images.images, plane_images.depths, sensor.camera, rc);
   }
-  // Whole or absent: written beside the output, read back (a full disk cuts it), then renamed.
-  OutputFile file(args.str("out"));
-  file.stream().close();
-  ref.save(file.temporaryPath().string());
-  try {
-    Reference::load(file.temporaryPath().string());
-  } catch (const std::exception& e) {
-    throw std::runtime_error("could not write all of " + args.str("out") + " (disk full?)");
-  }
-  file.commit();
+  writeCalibration(ref, args.str("out"));
 
   printCalibration(ref, ref_path, planes.size(), fit_rms);
   std::printf("\nwrote %s\n", args.str("out").c_str());

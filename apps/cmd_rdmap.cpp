@@ -14,6 +14,33 @@
 
 namespace multislit::apps {
 
+namespace {
+
+// Where each cloud goes: IMAGE.pcd, --out, or --out/IMAGE.pcd. None may replace an input (an
+// image, the calibration, the sensor file), nor two be the same file.
+std::vector<std::filesystem::path> outputTargets(const cli::ArgParser& args, bool to_folder) {
+  const std::vector<std::string>& images = args.rest();
+  const std::filesystem::path out = args.str("out");
+  std::vector<std::filesystem::path> targets;
+  for (const std::string& image : images) {
+    std::filesystem::path target = image;
+    target.replace_extension(".pcd");
+    if (to_folder && !out.empty())
+      target = out / target.filename();
+    else if (!out.empty())
+      target = out;
+    targets.push_back(target);
+  }
+  refuseSameOutputTwice(targets, images);
+  std::vector<std::string> inputs = images;
+  inputs.push_back(args.str("calibration"));
+  inputs.push_back(args.str("sensor"));
+  for (const auto& target : targets) refuseOverwritingInputs(target, inputs);
+  return targets;
+}
+
+}  // namespace
+
 int runRdmap(int argc, char** argv) {
   cli::ArgParser args(
       "rdmap",
@@ -41,23 +68,7 @@ int runRdmap(int argc, char** argv) {
   const std::vector<std::string>& images = args.rest();
   const std::filesystem::path out = args.str("out");
   const bool to_folder = images.size() > 1 || (!out.empty() && std::filesystem::is_directory(out));
-  // Where each cloud goes: IMAGE.pcd, --out, or --out/IMAGE.pcd; none may replace an input, nor
-  // two the same file.
-  std::vector<std::filesystem::path> targets;
-  for (const std::string& image : images) {
-    std::filesystem::path target = image;
-    target.replace_extension(".pcd");
-    if (to_folder && !out.empty())
-      target = out / target.filename();
-    else if (!out.empty())
-      target = out;
-    targets.push_back(target);
-  }
-  refuseSameOutputTwice(targets, images);
-  std::vector<std::string> inputs = images;
-  inputs.push_back(args.str("calibration"));
-  inputs.push_back(args.str("sensor"));
-  for (const auto& target : targets) refuseOverwritingInputs(target, inputs);
+  const std::vector<std::filesystem::path> targets = outputTargets(args, to_folder);
   if (to_folder && !out.empty()) std::filesystem::create_directories(out);
 
   const StopSignal stop;
