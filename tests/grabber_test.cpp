@@ -308,7 +308,9 @@ TEST(MultiSlitGrabber, StopReturnsWithinASecondWhenTheSourceHangs) {
   std::function<MultiSlitGrabber::sig_cb_rdmap> count = [&](const RdmapPtr&) { ++clouds; };
   grabber->registerCallback(count);
   grabber->start();
-  ASSERT_TRUE(waitFor([&] { return clouds >= 3; }));
+  // The source delivered its 3 frames (a busy callback may have seen fewer: the source is live,
+  // and a frame arriving while one is processed replaces the waiting one).
+  ASSERT_TRUE(waitFor([&] { return grabber->getStats().frames_received >= 3 && clouds >= 1; }));
   std::this_thread::sleep_for(milliseconds(100));  // now inside the hanging call
   auto t0 = Clock::now();
   grabber->stop();
