@@ -339,9 +339,12 @@ void MultiSlitGrabber::process(Frame& frame, Run& run) {
   const Clock::time_point now = Clock::now();
   counters_->record(now, std::chrono::duration<double, std::milli>(now - frame.arrival).count());
 
+  // stop() during the extraction: the frame goes to no callback and is not counted as processed
+  // (frames_processed counts frames handed to the callbacks).
+  if (stopping()) return;
   if (want_frame) (*frame_signal_)(std::make_shared<const Frame>(std::move(frame)));
-  if (rdmap && want_rdmap && !stopping()) (*rdmap_signal_)(rdmap);
-  if (rdmap && want_xyz && !stopping()) (*xyz_signal_)(toXYZ(*rdmap));
+  if (rdmap && want_rdmap) (*rdmap_signal_)(rdmap);
+  if (rdmap && want_xyz && !stopping()) (*xyz_signal_)(toXYZ(*rdmap));  // a callback may stop
   ++counters_->processed;
 }
 
