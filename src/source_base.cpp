@@ -46,6 +46,17 @@ bool FrameSource::sleepUntil(Clock::time_point deadline) {
   return !interrupted_;
 }
 
+bool FrameSource::waitUntilDue(Clock::time_point start, std::uint64_t index, double fps,
+                               Clock::time_point deadline) {
+  const auto due = start + std::chrono::duration_cast<Clock::duration>(
+                               std::chrono::duration<double>(static_cast<double>(index) / fps));
+  if (due > deadline) {
+    sleepUntil(deadline);
+    return false;
+  }
+  return sleepUntil(due);
+}
+
 bool FrameSource::takeTrigger(Clock::time_point deadline) {
   std::unique_lock<std::mutex> lock(wait_mutex_);
   wait_cv_.wait_until(lock, deadline, [this] { return interrupted_ || triggers_ > 0; });

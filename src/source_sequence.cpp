@@ -191,14 +191,7 @@ std::optional<Frame> ImageSequenceSource::next(std::chrono::milliseconds timeout
   if (config_.triggered) {
     if (!takeTrigger(deadline)) return std::nullopt;
   } else if (config_.fps > 0) {
-    const auto due =
-        started_ + std::chrono::duration_cast<Clock::duration>(
-                       std::chrono::duration<double>(static_cast<double>(position_) / config_.fps));
-    if (due > deadline) {
-      sleepUntil(deadline);
-      return std::nullopt;
-    }
-    if (!sleepUntil(due)) return std::nullopt;
+    if (!waitUntilDue(started_, position_, config_.fps, deadline)) return std::nullopt;
   } else if (interrupted()) {
     return std::nullopt;
   }

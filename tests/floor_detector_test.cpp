@@ -4,6 +4,8 @@
 
 #include "multislit/plane_model.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -113,16 +115,7 @@ TEST(FloorDetector, Eq3GivesThePapersIterations) {
 }
 
 TEST(FloorDetector, ValidateNamesTheField) {
-  const auto message = [](auto change) {
-    FloorDetectorConfig config;
-    change(config);
-    try {
-      config.validate();
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string("valid");
-  };
+  const auto message = [](auto change) { return validationMessage<FloorDetectorConfig>(change); };
   EXPECT_EQ(message([](auto&) {}), "valid");
   EXPECT_NE(message([](auto& c) { c.sigma = 0.0; }).find("sigma"), std::string::npos);
   EXPECT_NE(message([](auto& c) { c.threshold_sigmas = -1.0; }).find("threshold_sigmas"),

@@ -3,6 +3,8 @@
 // above the frame's noise is found, and an empty floor of the same noise gives no run.
 #include "multislit/floor_detector.h"
 
+#include "test_support.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -134,16 +136,7 @@ TEST(SlitScale, NothingOnAnUnorganizedCloud) {
 }
 
 TEST(SlitScale, ValidateNamesTheField) {
-  const auto message = [](auto change) {
-    FloorDetectorConfig config;
-    change(config);
-    try {
-      config.validate();
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string("valid");
-  };
+  const auto message = [](auto change) { return validationMessage<FloorDetectorConfig>(change); };
   EXPECT_EQ(message([](auto&) {}), "valid");
   EXPECT_EQ(message([](auto& c) { c.min_window = 4; }),
             "FloorDetectorConfig.min_window must be odd and >= 3 rows");

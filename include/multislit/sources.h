@@ -68,6 +68,10 @@ class FrameSource {
   bool interrupted() const;
   /// Sleeps until `deadline`; false when interrupted.
   bool sleepUntil(Clock::time_point deadline);
+  /// Paced replay: waits until frame `index` of a stream that began at `start` at `fps` is due;
+  /// false when it is due after `deadline` (having slept until then) or when interrupted.
+  bool waitUntilDue(Clock::time_point start, std::uint64_t index, double fps,
+                    Clock::time_point deadline);
   /// Takes one pending trigger, waiting for it until `deadline`; false when none came.
   bool takeTrigger(Clock::time_point deadline);
 

@@ -42,15 +42,8 @@ void SimulatorSource::start() {
 std::optional<Frame> SimulatorSource::next(std::chrono::milliseconds timeout) {
   if (finished()) return std::nullopt;
   if (config_.fps > 0) {
-    const Clock::time_point deadline = Clock::now() + timeout;
-    const auto due =
-        started_ + std::chrono::duration_cast<Clock::duration>(
-                       std::chrono::duration<double>(static_cast<double>(rendered_) / config_.fps));
-    if (due > deadline) {
-      sleepUntil(deadline);
+    if (!waitUntilDue(started_, rendered_, config_.fps, Clock::now() + timeout))
       return std::nullopt;
-    }
-    if (!sleepUntil(due)) return std::nullopt;
   } else if (interrupted()) {
     return std::nullopt;
   }
