@@ -2,10 +2,12 @@
 // path on the same frames (issue 7), with the agreement of the two paths' detections.
 #include "bench_input.h"
 #include "bench_run.h"
+#include "bench_soak.h"
 #include "bench_stock.h"
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
@@ -23,6 +25,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -294,33 +297,42 @@ int runBench(int argc, char** argv) {
   args.option("tolerance", "0.1", "share of differing obstacle points two agreeing frames allow");
   args.option("cpu", "-1", "CPU to pin to; -1: the one the command starts on");
   args.option("out", "", "CSV file of the table");
+  args.option("soak", "0",
+              "instead of timing: run the whole chain over this many frames (the rendered ones "
+              "in turn) sampling resident memory; rc 1 when it grows over 5 % after warm-up");
+  args.option("soak-png", "", "figure of the soak's memory curve (PNG)");
   if (!args.parse(argc, argv)) return 0;
   const std::vector<int> scales = parseScales(args.str("scale"));
-  const int passes = static_cast<int>(args.integer("passes"));
-  if (passes < 1) throw cli::UsageError("--passes must be >= 1");
+  const int passes = static_cast<int>(args.integer("passes", 1, 100000));
+  const long frames = args.integer("frames", 1, 100000);
+  const double step = args.number("step", -1, 1), tolerance = args.number("tolerance", 0, 1);
+  const long soak_frames = args.integer("soak", 0, 1000000000000L);
   if (args.has("sequence") && scales != std::vector<int>{1})
     throw cli::UsageError("--scale needs simulated frames (no --sequence)");
+  const auto cpu_asked = static_cast<int>(args.integer("cpu", -1, CPU_SETSIZE - 1));
 
   std::vector<BenchInput> inputs;
   for (const int scale : scales)
     inputs.push_back(args.has("sequence")
                          ? readBenchInput(args)
-                         : renderBenchInput(args.str("scenario"), args.integer("frames"),
-                                            args.number("step"), scale));
+                         : renderBenchInput(args.str("scenario"), frames, step, scale));
+  if (soak_frames > 0) {
+    const StopSignal stop;  // Ctrl-C: the report of the frames run so far
+    const SoakResult r = soak(inputs.front(), static_cast<std::size_t>(soak_frames), 200);
+    const int rc = reportSoak(r, 0.1, 0.05, args.str("soak-png"));
+    return StopSignal::requested() ? kInterruptedExit : rc;
+  }
   const double rss_before = peakRssMb();
-  const int cpu = pinToOneCore(static_cast<int>(args.integer("cpu")));
+  const int cpu = pinToOneCore(cpu_asked);
   std::vector<ScaleResult> results;
-  for (const BenchInput& in : inputs)
-    results.push_back(measure(in, passes, args.number("tolerance")));
+  for (const BenchInput& in : inputs) results.push_back(measure(in, passes, tolerance));
 
   std::printf("multislit bench: %s, pinned to CPU %d, %d passes (stock: %d)\n",
               inputs.front().label.c_str(), cpu, passes, std::max(1, passes / 4));
-  std::ofstream csv;
-  if (args.has("out")) {
-    csv.open(args.str("out"));
-    if (!csv) throw std::runtime_error("cannot write '" + args.str("out") + "'");
-  }
-  printTable(results, args.has("out") ? &csv : nullptr);
+  std::unique_ptr<OutputFile> csv;  // whole or absent
+  if (args.has("out")) csv = std::make_unique<OutputFile>(args.str("out"));
+  printTable(results, csv ? &csv->stream() : nullptr);
+  if (csv) csv->commit();
   for (const ScaleResult& r : results) printSummary(r);
   std::printf("peak memory %.0f MB (%.0f MB before the timed passes: images and simulator)\n",
               peakRssMb(), rss_before);

@@ -98,12 +98,12 @@ void writeJsonLine(std::ostream& out, const std::string& frame,
 
 FloorDetectorConfig detectorConfig(const cli::ArgParser& args) {
   FloorDetectorConfig fc;
-  fc.sigma = args.number("sigma");
+  fc.sigma = args.number("sigma", 0.001, 100);
   fc.estimate_sigma = !args.has("fixed-sigma");
-  fc.min_sigma = args.number("min-sigma");
-  fc.max_sigma = args.number("max-sigma");
-  fc.threshold_sigmas = args.number("threshold-sigmas");
-  fc.max_iterations = static_cast<int>(args.integer("iterations"));
+  fc.min_sigma = args.number("min-sigma", 0.001, 100);
+  fc.max_sigma = args.number("max-sigma", 0.001, 100);
+  fc.threshold_sigmas = args.number("threshold-sigmas", 0.1, 100);
+  fc.max_iterations = static_cast<int>(args.integer("iterations", 0, 1000000));
   return fc;
 }
 

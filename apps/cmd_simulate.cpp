@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 
 namespace multislit::apps {
 namespace {
@@ -70,13 +71,14 @@ void addSimulateOptions(cli::ArgParser& args) {
 
 // --scenario or --wall-depth, with --scene and the pose's overrides.
 Scenario scenarioFromArgs(const cli::ArgParser& args) {
-  Scenario scenario = args.has("wall-depth") ? makeWallScenario(args.number("wall-depth"))
+  // The ranges of SensorConfig::validate() (mount) and of a walk's step.
+  Scenario scenario = args.has("wall-depth") ? makeWallScenario(args.number("wall-depth", 0.05, 10))
                                              : makeScenario(args.str("scenario"));
   if (args.has("scene")) scenario.scene = Scene::load(args.str("scene"));
-  if (args.has("tilt")) scenario.mount.tilt = args.number("tilt");
-  if (args.has("roll")) scenario.mount.roll = args.number("roll");
-  if (args.has("height")) scenario.mount.height = args.number("height");
-  if (args.has("step")) scenario.step = args.number("step");
+  if (args.has("tilt")) scenario.mount.tilt = args.number("tilt", 0, 90);
+  if (args.has("roll")) scenario.mount.roll = args.number("roll", -45, 45);
+  if (args.has("height")) scenario.mount.height = args.number("height", 0.001, 9.999);
+  if (args.has("step")) scenario.step = args.number("step", -1, 1);
   return scenario;
 }
 
@@ -92,7 +94,7 @@ Photometry photometryFromArgs(const cli::ArgParser& args, uint64_t seed, Scene& 
   }
   RenderConfig& render = photometry.render;
   if (args.has("seed") || !args.has("photometry")) render.seed = seed;
-  if (args.has("bit-depth")) render.bit_depth = static_cast<int>(args.integer("bit-depth"));
+  if (args.has("bit-depth")) render.bit_depth = static_cast<int>(args.integer("bit-depth", 8, 16));
   render.noise = render.noise && !args.has("no-noise");
   return photometry;
 }
@@ -137,6 +139,25 @@ std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long f
   return crossings;
 }
 
+// What was written, and how fast.
+void printSummary(const Scenario& scenario, const Photometry& photometry,
+                  const std::filesystem::path& out, long images, long frames, std::size_t crossings,
+                  double seconds) {
+  std::cout << "scenario " << scenario.name << ": " << scenario.description << "\n"
+            << "photometry " << photometry.name << " (" << (out / "photometry.yaml").string()
+            << ")\n"
+            << "wrote " << images << " images to " << out.string() << " ("
+            << (images > 0 ? 1000.0 * seconds / static_cast<double>(images) : 0.0)
+            << " ms per image)";
+  if (frames > 0)
+    std::cout << ", " << crossings / static_cast<std::size_t>(frames)
+              << " slit crossings per frame";
+  std::cout << "\n  reference: " << (out / "reference.png").string() << " (+ .csv ground truth)\n"
+            << "  sequence:  " << (out / "frame_*.png").string() << ", index in "
+            << (out / "frames.csv").string() << ", poses in " << (out / "odometry.csv").string()
+            << "\n";
+}
+
 }  // namespace
 
 int runSimulate(int argc, char** argv) {
@@ -155,18 +176,20 @@ int runSimulate(int argc, char** argv) {
   Scenario scenario = scenarioFromArgs(args);
   SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
-  const auto seed = args.has("seed") ? static_cast<uint64_t>(args.integer("seed")) : 1u;
+  const auto seed =
+      args.has("seed")
+          ? static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()))
+          : 1u;
   const Photometry photometry = photometryFromArgs(args, seed, scenario.scene);
-  const long frames = args.integer("frames");
-  const double fps = args.number("fps");
-  if (frames < 0) throw cli::UsageError("--frames must be >= 0");
-  if (!(fps > 0)) throw cli::UsageError("--fps must be > 0");
+  const long frames = args.integer("frames", 0, 10000000);
+  const double fps = args.number("fps", 0.01, 100000);
+  SensorConfig used = sensor;
+  used.mount = scenario.mount;
+  used.validate();  // the sensor.yaml written below is one SensorConfig::load() takes
 
   const std::filesystem::path out = args.str("out");
   std::filesystem::create_directories(out);
   const Simulator sim(sensor, photometry.render);
-  SensorConfig used = sensor;
-  used.mount = scenario.mount;
   used.save((out / "sensor.yaml").string());
   scenario.scene.save((out / "scene.yaml").string());
   savePhotometry(photometry, (out / "photometry.yaml").string());
@@ -182,20 +205,8 @@ int runSimulate(int argc, char** argv) {
   const std::size_t crossings = writeSequence(sim, scenario, frames, fps, out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const long images = frames + (args.has("no-reference") ? 0 : 1);
-  std::cout << "scenario " << scenario.name << ": " << scenario.description << "\n"
-            << "photometry " << photometry.name << " (" << (out / "photometry.yaml").string()
-            << ")\n"
-            << "wrote " << images << " images to " << out.string() << " ("
-            << (images > 0 ? 1000.0 * seconds / static_cast<double>(images) : 0.0)
-            << " ms per image)";
-  if (frames > 0)
-    std::cout << ", " << crossings / static_cast<std::size_t>(frames)
-              << " slit crossings per frame";
-  std::cout << "\n  reference: " << (out / "reference.png").string() << " (+ .csv ground truth)\n"
-            << "  sequence:  " << (out / "frame_*.png").string() << ", index in "
-            << (out / "frames.csv").string() << ", poses in " << (out / "odometry.csv").string()
-            << "\n";
+  printSummary(scenario, photometry, out, frames + (args.has("no-reference") ? 0 : 1), frames,
+               crossings, seconds);
   if (StopSignal::requested()) std::cout << "interrupted (Ctrl-C): the frames above are whole\n";
   return StopSignal::requested() ? kInterruptedExit : 0;
 }

@@ -2,10 +2,12 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "output_file.h"
 #include "plot.h"
 
 #include "multislit/extractor.h"
 #include "multislit/plane_model.h"
+#include "multislit/sim/rdmap_synth.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
 
@@ -14,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <numeric>
 
 namespace multislit::apps {
@@ -84,24 +87,21 @@ int runTable1(int argc, char** argv) {
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
   args.option("out", "out/table1", "output folder");
   if (!args.parse(argc, argv)) return 0;
-  const long frames = args.integer("frames");
-  if (frames < 1) throw cli::UsageError("--frames must be >= 1");
+  const long frames = args.integer("frames", 1, 1000000);
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
   RenderConfig rc;
-  rc.seed = static_cast<uint64_t>(args.integer("seed"));
+  rc.seed = static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()));
   const Simulator sim(sensor, rc);
 
   // The reference: the bare floor at the reference pose (Sec. II-C).
   const Scenario ref_scene = makeScenario("reference");
-  Reference ref =
-      Reference::fromImage(sim.renderReference(ref_scene.scene, ref_scene.reference_mount).image);
-  ref.setNominalScale(sensor, ref_scene.reference_mount);
-  const Extractor extractor(ref);
+  const Extractor extractor(renderFloorReference(sensor, ref_scene.reference_mount, rc));
 
   const std::filesystem::path out = args.str("out");
   std::filesystem::create_directories(out);
-  std::ofstream csv(out / "table1.csv");
+  OutputFile csv_file(out / "table1.csv");  // whole or absent
+  std::ofstream& csv = csv_file.stream();
   csv << "condition,theta_deg,phi_deg,h_mm,frames,mean_points,mean_residual_std_px,std_of_std_px\n";
   std::vector<std::string> labels;
   std::vector<double> means, spreads;
@@ -124,6 +124,7 @@ int runTable1(int argc, char** argv) {
     rows.push_back(row);
   }
   progress.finish();
+  csv_file.commit();
   reportTable1(out, frames, rows, labels, means, spreads);
   return 0;
 }

@@ -64,8 +64,11 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
   c.pipeline.obstacles.method = cluster == "grid" ? ClusterMethod::Grid : ClusterMethod::Euclidean;
   if (args.has("screw")) {
     double x = 0, y = 0;
-    if (std::sscanf(args.str("screw").c_str(), "%lf,%lf", &x, &y) != 2)
-      throw cli::UsageError("--screw needs X,Y in metres");
+    char end = 0;
+    if (std::sscanf(args.str("screw").c_str(), "%lf,%lf%c", &x, &y, &end) != 2 ||
+        !(std::abs(x) <= 100 && std::abs(y) <= 100))
+      throw cli::UsageError("--screw needs X,Y in metres, each within +-100, not '" +
+                            args.str("screw") + "'");
     c.scene.extra.push_back(SceneObject::cylinder("screw", Eigen::Vector3d(x, y, 0),
                                                   Eigen::Vector3d(x, y, 0.002), 0.003));
   }

@@ -10,23 +10,6 @@
 
 namespace multislit::apps {
 
-cv::Mat readMonoImage(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    throw std::runtime_error("image '" + path + "' does not exist");
-  cv::Mat image;
-  try {
-    image = cv::imread(path, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error("image '" + path + "' cannot be decoded: " + e.err);
-  }
-  if (image.empty()) throw std::runtime_error("image '" + path + "' is corrupt or not an image");
-  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U))
-    throw std::runtime_error("image '" + path + "' must be 8- or 16-bit grey (one channel), not " +
-                             std::to_string(image.channels()) + " channel(s) of depth " +
-                             std::to_string(image.depth()));
-  return image;
-}
-
 void writeImage(const std::string& path, const cv::Mat& image) {
   if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write image '" + path + "'");
 }
@@ -35,17 +18,28 @@ void addReferenceOptions(cli::ArgParser& args) {
   args.option("calibration", "", "calibration file from multislit calibrate");
   args.option("reference", "", "reference image of the floor (instead of --calibration)");
   args.option("sensor", "", "sensor YAML; its mount is the reference pose (default: the paper's)");
+  args.option("full-scale", "0",
+              "the --reference image's white [DN], 4095 for 12-bit data in 16-bit images; 0: the "
+              "image type's (a calibration keeps its own)");
 }
 
 Reference referenceFromArgs(const cli::ArgParser& args) {
-  if (args.has("calibration")) return Reference::load(args.str("calibration"));
+  const double full_scale = args.number("full-scale", 0, 65535);
+  if (args.has("calibration")) {
+    if (full_scale > 0)
+      throw cli::UsageError("--full-scale goes with --reference; a calibration keeps its own");
+    return Reference::load(args.str("calibration"));
+  }
   if (!args.has("reference")) throw cli::UsageError("give --calibration FILE or --reference IMAGE");
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
   const std::string path = args.str("reference");
   Reference ref;
   try {
-    ref = Reference::fromImage(readMonoImage(path));
+    ReferenceConfig config;
+    config.full_scale = full_scale;
+    config.expected_slits = sensor.projector.slit_count;
+    ref = Reference::fromImage(readMonoImage(path), config);
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(path + ": " + e.what());
   }

@@ -3,6 +3,7 @@
 
 #include "cli.h"
 
+#include "multislit/image_file.h"  // readMonoImage
 #include "multislit/reference.h"
 #include "multislit/slit_profile.h"
 
@@ -12,14 +13,12 @@
 
 namespace multislit::apps {
 
-/// An 8- or 16-bit one-channel image as stored (no conversion); throws std::runtime_error naming
-/// the file when it is missing, corrupt or of another kind.
-cv::Mat readMonoImage(const std::string& path);
 void writeImage(const std::string& path, const cv::Mat& image);
 /// "gaussian", "centroid" or "windowed"; throws cli::UsageError otherwise.
 Estimator parseEstimator(const std::string& name);
 
-/// Declares --calibration, --reference and --sensor, the ways a command gets its reference.
+/// Declares --calibration, --reference, --sensor and --full-scale, the ways a command gets its
+/// reference.
 void addReferenceOptions(cli::ArgParser& args);
 /// The calibration file when given, else the slits of the reference image with the sensor
 /// model's scale (the reference pose is the mount of --sensor).

@@ -105,8 +105,9 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
 }
 
 ProfileParams Extractor::profileParams(int depth) const {
-  const double full =
-      config_.full_scale > 0 ? config_.full_scale : (depth == CV_8U ? 255.0 : 65535.0);
+  const double full = config_.full_scale > 0      ? config_.full_scale
+                      : reference_.full_scale > 0 ? reference_.full_scale
+                                                  : (depth == CV_8U ? 255.0 : 65535.0);
   ProfileParams params;
   params.estimator = config_.estimator;
   params.min_contrast = config_.min_contrast * full;

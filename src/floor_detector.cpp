@@ -308,7 +308,8 @@ void FloorDetectorConfig::validate() const {
   require(band_sigmas > 0.0 && std::isfinite(band_sigmas), "band_sigmas", "must be > 0");
   require(probability > 0.0 && probability < 1.0, "probability", "must be in (0, 1)");
   require(outlier_ratio >= 0.0 && outlier_ratio < 1.0, "outlier_ratio", "must be in [0, 1)");
-  require(max_iterations >= 0, "max_iterations", "must be >= 0 (0: from eq. 3)");
+  require(max_iterations >= 0 && max_iterations <= 1000000, "max_iterations",
+          "must be in [0, 1000000] (0: from eq. 3)");
   require(min_points >= 3, "min_points", "must be >= 3 (a plane needs three points)");
   require(min_window >= 3 && min_window % 2 == 1, "min_window", "must be odd and >= 3 rows");
   require(max_window >= min_window, "max_window", "must be >= min_window rows");

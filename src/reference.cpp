@@ -95,11 +95,14 @@ void ReferenceConfig::validate() const {
     if (!ok) throw std::invalid_argument(std::string("reference config: ") + field + " " + rule);
   };
   require(expected_slits >= 1 && expected_slits <= 64, "expected_slits", "must be in [1, 64]");
-  require(region_width >= 0, "region_width", "must be >= 0 (0: automatic)");
+  require(region_width == 0 || (region_width >= 3 && region_width <= 16384), "region_width",
+          "must be 0 (automatic) or in [3, 16384] px");
   require(min_contrast > 0 && min_contrast < 1, "min_contrast", "must be in (0, 1) of full scale");
   require(min_rows >= 3, "min_rows", "must be >= 3");
   require(max_gap >= 1, "max_gap", "must be >= 1");
   require(smoothing_degree >= 0 && smoothing_degree <= 8, "smoothing_degree", "must be in [0, 8]");
+  require(full_scale == 0 || (full_scale >= 1 && full_scale <= 65535), "full_scale",
+          "must be 0 (the image type's) or in [1, 65535] DN");
 }
 
 Reference Reference::fromImage(const cv::Mat& image, const ReferenceConfig& config) {
@@ -116,6 +119,7 @@ Reference Reference::fromImage(const cv::Mat& image, const ReferenceConfig& conf
   ref.smoothing_rms = found.smoothing_rms;
   ref.joined_pieces = found.joined;
   ref.dropped_tracks = found.dropped;
+  ref.full_scale = config.full_scale;
   ref.max_region_width = widestRegion(ref.slits, image.rows);
   if (ref.max_region_width < 3)
     throw std::runtime_error("reference image: the slits are too close for any assigned region");
@@ -144,7 +148,11 @@ Reference Reference::fromImages(const std::vector<cv::Mat>& images, const Refere
   const double to16 = first.depth() == CV_8U ? 257.0 : 1.0;
   cv::Mat mean;
   sum.convertTo(mean, CV_16U, to16 / static_cast<double>(images.size()));
-  return fromImage(mean, config);
+  ReferenceConfig mean_config = config;  // the full scale of the 16-bit mean
+  mean_config.full_scale *= to16;
+  Reference ref = fromImage(mean, mean_config);
+  ref.full_scale = config.full_scale;
+  return ref;
 }
 
 std::size_t Reference::pointCount() const {
@@ -170,6 +178,11 @@ void Reference::checkImage(const cv::Mat& image, const std::string& what) const 
         what + ": image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
         " but the reference was taken with a " + std::to_string(image_width) + "x" +
         std::to_string(image_height) + " camera");
+  const double white = image.depth() == CV_8U ? 255.0 : 65535.0;
+  if (full_scale > white)
+    throw std::invalid_argument(
+        what + ": the calibration's full_scale " + std::to_string(static_cast<int>(full_scale)) +
+        " DN is above the white of this " + (image.depth() == CV_8U ? "8" : "16") + "-bit image");
 }
 
 void Reference::setNominalScale(const SensorConfig& sensor, const MountConfig& reference_mount) {
@@ -238,6 +251,7 @@ void Reference::save(const std::string& path) const {
   fs << "camera_id" << camera_id;
   fs << "region_width" << region_width << "max_region_width" << max_region_width;
   fs << "profile_width" << profile_width << "smoothing_rms" << smoothing_rms;
+  fs << "full_scale" << full_scale;
   fs << "scale"
      << "{"
      << "source" << scale.source << "f" << scale.f << "cx" << scale.cx << "cy" << scale.cy
@@ -260,7 +274,7 @@ Reference Reference::load(const std::string& path) {
     const cv::FileNode root = fs.root();
     checkKeys(root, "",
               {"image_width", "image_height", "camera_id", "region_width", "max_region_width",
-               "profile_width", "smoothing_rms", "scale", "slits"});
+               "profile_width", "smoothing_rms", "full_scale", "scale", "slits"});
     checkKeys(fs["scale"], "scale", {"source", "f", "cx", "cy", "disparity_constant"});
     readField(root, "image_width", ref.image_width);
     readField(root, "image_height", ref.image_height);
@@ -269,6 +283,7 @@ Reference Reference::load(const std::string& path) {
     readField(root, "max_region_width", ref.max_region_width);
     readField(root, "profile_width", ref.profile_width);
     readField(root, "smoothing_rms", ref.smoothing_rms);
+    readField(root, "full_scale", ref.full_scale);
     const cv::FileNode sc = fs["scale"];
     readField(sc, "source", ref.scale.source);
     readField(sc, "f", ref.scale.f);

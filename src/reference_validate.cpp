@@ -3,6 +3,8 @@
 // the image and apart from each other by at least the assigned region.
 #include "multislit/reference.h"
 
+#include "multislit/image_file.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,9 +14,6 @@
 namespace multislit {
 
 namespace {
-
-/// Largest image side accepted [px]: 4x the paper's camera, a 16k sensor.
-constexpr int kMaxImageSide = 16384;
 
 void require(bool ok, const std::string& field, const std::string& rule) {
   if (!ok) throw std::invalid_argument(field + " " + rule);
@@ -78,6 +77,8 @@ void Reference::validate() const {
           "must be in 0 .. image_width px");
   require(std::isfinite(profile_width) && profile_width > 0 && profile_width <= region_width,
           "profile_width", "must be finite, > 0 and <= region_width px");
+  require(full_scale == 0 || (full_scale >= 1 && full_scale <= 65535), "full_scale",
+          "must be 0 (the image type's) or in [1, 65535] DN");
   require(std::isfinite(smoothing_rms) && smoothing_rms >= 0, "smoothing_rms",
           "must be finite and >= 0 px");
   require(std::isfinite(scale.f) && scale.f >= 0, "scale.f", "must be finite and >= 0 px");

@@ -1,4 +1,5 @@
 #include "multislit/sensor.h"
+#include "multislit/image_file.h"
 #include "multislit/units.h"
 
 #include "yaml_io.h"
@@ -18,8 +19,9 @@ void require(bool ok, const std::string& field, const std::string& rule) {
 
 void SensorConfig::validate() const {
   const CameraConfig& c = camera;
-  require(c.width >= 16 && c.width <= 20000, "camera.width", "must be in [16, 20000] px");
-  require(c.height >= 16 && c.height <= 20000, "camera.height", "must be in [16, 20000] px");
+  const std::string sides = "must be in [16, " + std::to_string(kMaxImageSide) + "] px";
+  require(c.width >= 16 && c.width <= kMaxImageSide, "camera.width", sides);
+  require(c.height >= 16 && c.height <= kMaxImageSide, "camera.height", sides);
   require(c.pixel_size > 0 && c.pixel_size < 1e-3, "camera.pixel_size", "must be in (0, 1e-3) m");
   require(c.focal_length > 0 && c.focal_length < 1.0, "camera.focal_length", "must be in (0, 1) m");
   require(c.principal_x < c.width, "camera.principal_x", "must lie inside the image");

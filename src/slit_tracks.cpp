@@ -1,5 +1,6 @@
 #include "slit_tracks.h"
 
+#include "full_scale.h"
 #include "slit_course.h"
 
 #include <Eigen/Dense>
@@ -335,8 +336,10 @@ double imageNoise(const cv::Mat& image) {
   return 1.4826 * upperMedian(d) / std::sqrt(1.5);  // the second difference has 1.5 variances
 }
 
-DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
-                          const std::string& what) {
+namespace {
+
+DetectedSlits detectSlitsInRange(const cv::Mat& image, const ReferenceConfig& config,
+                                 const std::string& what) {
   // The image in 16-bit DN (an 8-bit image times 257), so that smoothing keeps its fractions.
   const double to16 = image.depth() == CV_8U ? 257.0 : 1.0;
   // The contrast limit: the configured one, or lower where the image is clean enough that
@@ -385,6 +388,19 @@ DetectedSlits detectSlits(const cv::Mat& image, const ReferenceConfig& config,
                              " rows");
   out.smoothing_rms = m ? std::sqrt(ss / static_cast<double>(m)) : 0.0;
   return out;
+}
+
+}  // namespace
+
+DetectedSlits detectSlits(const cv::Mat& input, const ReferenceConfig& config,
+                          const std::string& what) {
+  try {
+    return detectSlitsInRange(toFullRange(input, config.full_scale), config, what);
+  } catch (const std::runtime_error& e) {
+    const std::string hint = fullScaleHint(input, config);
+    if (hint.empty()) throw;
+    throw std::runtime_error(e.what() + hint);
+  }
 }
 
 }  // namespace multislit

@@ -1,6 +1,8 @@
 // ImageSequenceSource: recorded PNG images, replayed at a rate, as fast as taken, or stepped.
 #include "multislit/sources.h"
 
+#include "multislit/image_file.h"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -204,13 +206,9 @@ std::optional<Frame> ImageSequenceSource::next(std::chrono::milliseconds timeout
   const std::string& file = files_[seq % n];
   cv::Mat image;
   try {
-    image = cv::imread(file, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
-    image.release();
-  }
-  if (image.empty() || image.channels() != 1 ||
-      (image.depth() != CV_8U && image.depth() != CV_16U)) {
-    ++read_errors_;  // missing, corrupt, or not a one-channel 8- or 16-bit image
+    image = readMonoImage(file);
+  } catch (const std::runtime_error&) {
+    ++read_errors_;  // missing, corrupt, too large, or not a one-channel 8- or 16-bit image
     return std::nullopt;
   }
   // A repeated sequence goes on in time: each loop is shifted by the span of the sequence.

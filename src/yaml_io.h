@@ -4,12 +4,15 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 namespace multislit {
 
@@ -88,7 +91,7 @@ inline cv::FileStorage openYamlForWrite(const std::string& path, const std::stri
 /// at most once: a misspelt key would otherwise be ignored and its default used, and of a key
 /// given twice OpenCV would keep the first. `where` names the map ("camera", "" for the top).
 inline void checkKeys(const cv::FileNode& node, const std::string& where,
-                      std::initializer_list<const char*> known) {
+                      const std::vector<std::string>& known) {
   if (node.empty() || node.isNone()) return;
   const std::string at = where.empty() ? "" : where + ".";
   if (!node.isMap())
@@ -98,15 +101,20 @@ inline void checkKeys(const cv::FileNode& node, const std::string& where,
   for (const cv::FileNode& entry : node) {
     const std::string key = entry.name();
     bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
+    for (const std::string& k : known) ok = ok || key == k;
     if (!ok) {
       std::string list;
-      for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
       throw std::invalid_argument("unknown key '" + at + key + "' (known: " + list + ")");
     }
     if (!seen.insert(key).second)
       throw std::invalid_argument("key '" + at + key + "' is given twice");
   }
+}
+
+inline void checkKeys(const cv::FileNode& node, const std::string& where,
+                      std::initializer_list<const char*> known) {
+  checkKeys(node, where, std::vector<std::string>(known.begin(), known.end()));
 }
 
 /// Reads node[key] into value when present; throws std::invalid_argument naming the key when
@@ -116,14 +124,25 @@ void readField(const cv::FileNode& node, const char* key, T& value) {
   if (node.empty() || !node.isMap()) return;
   const cv::FileNode n = node[key];
   if (n.empty() || n.isNone()) return;
-  if constexpr (std::is_arithmetic_v<T>) {
-    if (!n.isInt() && !n.isReal())
-      throw std::invalid_argument(std::string("field '") + key + "' must be a number");
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    if (!n.isString())
-      throw std::invalid_argument(std::string("field '") + key + "' must be a string");
+  if constexpr (std::is_integral_v<T>) {
+    // OpenCV rounds a real into an int and wraps a negative one into an unsigned: refuse both.
+    const double v = n.isInt() || n.isReal() ? static_cast<double>(n) : 0.5;
+    if (!(v == std::floor(v) && v >= static_cast<double>(std::numeric_limits<T>::lowest()) &&
+          v <= static_cast<double>(std::numeric_limits<T>::max())))
+      throw std::invalid_argument(std::string("field '") + key + "' must be an integer in [" +
+                                  std::to_string(std::numeric_limits<T>::lowest()) + ", " +
+                                  std::to_string(std::numeric_limits<T>::max()) + "]");
+    value = static_cast<T>(v);
+  } else {
+    if constexpr (std::is_arithmetic_v<T>) {
+      if (!n.isInt() && !n.isReal())
+        throw std::invalid_argument(std::string("field '") + key + "' must be a number");
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      if (!n.isString())
+        throw std::invalid_argument(std::string("field '") + key + "' must be a string");
+    }
+    n >> value;
   }
-  n >> value;
 }
 
 }  // namespace multislit

@@ -1,5 +1,6 @@
 // From simulated images to RDMaps, measured against the simulator's ground truth.
 #include "multislit/extractor.h"
+#include "extraction_errors.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
 #include "multislit/slit_profile.h"
@@ -43,47 +44,6 @@ Reference makeReference(const Simulator& sim = simulator()) {
 const Reference& reference() {
   static const Reference ref = makeReference();
   return ref;
-}
-
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
-}
-
-struct Errors {
-  std::size_t truth = 0, valid = 0;
-  std::vector<double> subpixel;  // |u' - true u| [px]
-  std::vector<double> depth;     // |z - true z| / range [-]
-  double plane_std = 0;          // residual std about the least-squares plane of eq. (2) [px]
-};
-
-Errors compare(const pcl::PointCloud<PointRDM>& cloud, const std::vector<SlitCrossing>& truth) {
-  Errors e;
-  e.truth = truth.size();
-  std::map<std::pair<int, int>, const SlitCrossing*> by_slit_row;
-  for (const SlitCrossing& t : truth) by_slit_row[{t.slit, t.row}] = &t;
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-  for (const PointRDM& p : cloud) {
-    if (!std::isfinite(p.dk)) continue;
-    ++e.valid;
-    const Eigen::Vector3d a(p.u, p.v, 1.0);
-    ata += a * a.transpose();
-    atb += a * p.dk;
-    const auto it = by_slit_row.find({p.slit, static_cast<int>(p.v)});
-    if (it == by_slit_row.end()) continue;
-    e.subpixel.push_back(std::abs(p.u + p.dk - it->second->u));
-    if (std::isfinite(p.z))
-      e.depth.push_back(std::abs(p.z - it->second->camera_point.z()) /
-                        it->second->camera_point.norm());
-  }
-  const Eigen::Vector3d plane = ata.ldlt().solve(atb);
-  double ss = 0;
-  for (const PointRDM& p : cloud)
-    if (std::isfinite(p.dk)) ss += std::pow(p.dk - plane.dot(Eigen::Vector3d(p.u, p.v, 1)), 2);
-  e.plane_std = std::sqrt(ss / static_cast<double>(e.valid));
-  return e;
 }
 
 std::string messageOf(const std::function<void()>& f) {
@@ -307,20 +267,6 @@ TEST(Extractor, BatchedProfilesMatchTheScalarMeasure) {
   EXPECT_GT(found, regions_seen * 9 / 10);
   EXPECT_EQ(differ, 0u);
   EXPECT_LT(worst, 1e-3);
-}
-
-TEST(Extractor, SixteenBitImagesMeasureAsWell) {
-  RenderConfig rc;
-  rc.bit_depth = 16;
-  const Simulator sim16{SensorConfig{}, rc};
-  const Extractor ex(makeReference(sim16));
-  const RenderedFrame f = renderScenario(makeScenario("cond4"), 9, sim16);
-  pcl::PointCloud<PointRDM> cloud;
-  ex.extract(f.image, cloud);
-  const Errors e = compare(cloud, f.truth);
-  EXPECT_GE(static_cast<double>(e.subpixel.size()), 0.98 * static_cast<double>(e.truth));
-  EXPECT_LE(quantile(e.subpixel, 0.5), 0.1);
-  EXPECT_LE(quantile(e.subpixel, 0.95), 0.3);
 }
 
 // Absolute scale from a wall at known distances, as with a tape measure.

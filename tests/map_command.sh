@@ -7,11 +7,8 @@
 set -u
 multislit=$1
 work=$2
+source "$(dirname "${BASH_SOURCE[0]}")/check_support.sh"
 rm -rf "$work" && mkdir -p "$work"
-fail() {
-  echo "FAIL: $*"
-  exit 1
-}
 occupied() { sed -n 's/.*map: \([0-9]*\) occupied voxels.*/\1/p' "$1" | head -1; }
 
 # 1. Record a walk with the ball thrown in at frame 5, replay it.

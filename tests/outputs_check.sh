@@ -7,17 +7,8 @@
 set -u
 M=$1
 work=$2
-rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
-fail() {
-  echo "FAIL: $*"
-  exit 1
-}
-refused() {  # refused EXPECTED_MESSAGE COMMAND...: the command fails saying so
-  local expect=$1
-  shift
-  if "$@" >out.log 2>&1; then fail "accepted: $*"; fi
-  grep -q -- "$expect" out.log || fail "$*: $(cat out.log)"
-}
+source "$(dirname "${BASH_SOURCE[0]}")/check_support.sh"
+start_in "$work"
 "$M" simulate --scenario cable --frames 2 --out s >/dev/null 2>&1 || fail "simulate"
 "$M" calibrate --reference s/reference.png --out c.yaml >/dev/null 2>&1 || fail "calibrate"
 cp s/frame_000001.png f.png && cp f.png f.orig.png && cp c.yaml c.orig.yaml

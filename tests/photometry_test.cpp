@@ -12,6 +12,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 using namespace multislit;
 
@@ -316,4 +319,42 @@ TEST(Photometry, RandomDrawsKeepTheFloorStripeMeasurableAndRenderTheSameBytes) {
     ASSERT_GT(rows, 500);
     EXPECT_GT(visible, 0.7 * rows) << p.name;
   }
+}
+
+TEST(Photometry, FilesWithUnknownKeysOrValuesOutOfRangeAreRefusedNamingTheField) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "multislit_photometry_bad.yaml").string();
+  savePhotometry(photometryPreset("speckle"), path);
+  const std::string good = fileText(path);
+  // (replacement line, message part): the saved file with one line changed or added.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"laser_pek: 0.9", "unknown key 'laser_pek'"},
+      {"laser_peak: .inf", "laser_peak must be in [0, 100]"},
+      {"ambient: .nan", "ambient must be in [0, 100]"},
+      {"full_well: .inf", "full_well must be in [100, 1e15]"},
+      {"seed: \"-5\"", "field 'seed' must be an unsigned 64-bit integer"},
+      {"seed: \"99999999999999999999999\"", "field 'seed' must be an unsigned 64-bit integer"},
+      {"noise: 7", "field 'noise' must be 0 or 1"},
+      {"floor_texture_seed: -1", "'floor_texture_seed' must be an integer"},
+      {"bit_depth: 8.5", "'bit_depth' must be an integer"},
+  };
+  for (const auto& [line, expected] : cases) {
+    const std::string key = line.substr(0, line.find(':') + 1);
+    std::string text = good;
+    const std::size_t at = text.find("\n" + key);
+    if (at == std::string::npos)
+      text += line + "\n";
+    else
+      text.replace(at + 1, text.find('\n', at + 1) - at - 1, line);
+    std::ofstream(path) << text;
+    try {
+      loadPhotometry(path);
+      ADD_FAILURE() << line << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos)
+          << line << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  }
+  std::filesystem::remove(path);
 }

@@ -8,6 +8,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 using namespace multislit;
 
@@ -167,4 +170,57 @@ TEST(Scene, SurfacePhotometryRoundTripsThroughYaml) {
   s.scene.objects[0].stripe_width = 9;
   EXPECT_THROW(s.scene.validate(), std::invalid_argument);
   std::filesystem::remove(path);
+}
+
+namespace {
+
+// What Scene::load says of a file whose body (after the YAML header) is `body`: its message, or
+// "loaded".
+std::string loadMessage(const std::string& body) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "multislit_scene_bad.yaml").string();
+  std::ofstream(path) << "%YAML:1.0\n---\n" << body;
+  try {
+    Scene::load(path);
+  } catch (const std::invalid_argument& e) {
+    std::filesystem::remove(path);
+    return e.what();
+  }
+  std::filesystem::remove(path);
+  return "loaded";
+}
+
+}  // namespace
+
+TEST(Scene, BadValuesUnknownKeysAndHugeScenesAreRefusedNamingTheField) {
+  const std::string sphere = "objects:\n  - { type: sphere, name: b, radius: 0.02, ";
+  EXPECT_EQ(loadMessage(sphere + "centre: [0.3, 0, 0.02] }\n"), "loaded");
+  // (message part, file body): each refused, the field named.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"'centre' must be a list of 3 numbers", sphere + "centre: [a, b, c] }\n"},
+      {"centre must be finite", sphere + "centre: [.nan, 0, 0] }\n"},
+      {"centre must be finite", sphere + "centre: [1e300, 0, 0] }\n"},
+      {"size must be finite",
+       "objects:\n  - { type: box, name: x, centre: [0.3, 0, 0], size: [.inf, 1, 1] }\n"},
+      {"radius must be <= 100 m",
+       sphere.substr(0, sphere.size() - 14) + "radius: .inf, centre: [0.3, 0, 0] }\n"},
+      {"unknown key 'objects[0].size'", sphere + "centre: [0.3, 0, 0], size: [1, 1, 1] }\n"},
+      {"unknown key 'floor.albdo'", "floor: { albdo: 0.3 }\n"},
+      {"key 'floor.albedo' is given twice", "floor: { albedo: 0.3, albedo: 0.9 }\n"},
+      {"unknown key 'lights'", "lights: 3\n"},
+      {"'texture_seed' must be an integer", "floor: { texture_seed: -1 }\n"},
+      {"'texture_seed' must be an integer", "floor: { texture_seed: 2.5 }\n"},
+      {"texture_scale must be in (0, 100] m", "floor: { texture_scale: .inf }\n"},
+      {"'objects[0]' must be a map", "objects: [ 3 ]\n"},
+  };
+  for (const auto& [expected, body] : cases) {
+    const std::string message = loadMessage(body);
+    EXPECT_NE(message.find(expected), std::string::npos) << body << " -> " << message;
+    EXPECT_NE(message.find("multislit_scene_bad.yaml"), std::string::npos) << message;
+  }
+  std::string many = "objects:\n";
+  for (std::size_t k = 0; k <= Scene::kMaxObjects; ++k)
+    many += "  - { type: sphere, radius: 0.01, centre: [0.3, 0, 0.01] }\n";
+  EXPECT_NE(loadMessage(many).find("1001 objects, more than the limit of 1000"), std::string::npos)
+      << loadMessage(many);
 }

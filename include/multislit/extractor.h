@@ -21,8 +21,10 @@ struct ExtractorConfig {
   /// narrower. Absolute, not relative to the floor's stripe: on a glossy or small object the
   /// stripe may be half as wide as on the floor, and it is still the slit [px].
   double min_width = 1.5;
-  int max_saturated = 16;   ///< longest saturated run still measured [px]
-  double full_scale = 0.0;  ///< the image's white [DN]; 0: 255 for 8-bit, 65535 for 16-bit
+  int max_saturated = 16;  ///< longest saturated run still measured [px]
+  /// The image's white [DN]; 0: the reference's (calibrate --full-scale), else 255 for 8-bit
+  /// and 65535 for 16-bit images.
+  double full_scale = 0.0;
   std::string frame_id = "multislit_camera";  ///< header.frame_id of the clouds
 
   void validate() const;  ///< throws std::invalid_argument naming the field

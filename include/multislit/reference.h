@@ -21,6 +21,9 @@ struct ReferenceConfig {
   int max_gap = 25;            ///< rows a slit may be missing and still be one slit [rows]
   int smoothing_degree = 4;    ///< polynomial u(v) fitted along each slit; 0: raw centres
   Estimator estimator = Estimator::Gaussian;  ///< sub-pixel estimator for the centres
+  /// The images' white [DN]: 4095 for 12-bit data in 16-bit images; 0: 255 for 8-bit images,
+  /// 65535 for 16-bit ones.
+  double full_scale = 0.0;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -53,6 +56,7 @@ class Reference {
   double smoothing_rms = 0.0;             ///< rms of raw centres about the smoothed slits [px]
   int joined_pieces = 0;                  ///< slit pieces joined across gaps when found [-]
   int dropped_tracks = 0;                 ///< tracks found that were not slits (speckle) [-]
+  double full_scale = 0.0;  ///< the camera's white [DN] (ReferenceConfig); 0: the image type's
   std::vector<ReferenceSlit> slits;
   MetricScale scale;
 

@@ -3,6 +3,7 @@
 #include "yaml_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -280,6 +281,21 @@ Fields fieldsOf(Photometry& p) {
           {{"bit_depth", &r.bit_depth}, {"supersample", &r.supersample}}};
 }
 
+// The seed is written as a string: a 64-bit value does not fit OpenCV's int.
+uint64_t parseSeed(const std::string& text) {
+  std::size_t end = 0;
+  unsigned long long seed = 0;
+  try {
+    seed = std::stoull(text, &end);
+  } catch (const std::logic_error&) {
+    end = 0;
+  }
+  if (text.empty() || end != text.size() || !std::isdigit(static_cast<unsigned char>(text[0])))
+    throw std::invalid_argument("field 'seed' must be an unsigned 64-bit integer, not '" + text +
+                                "'");
+  return seed;
+}
+
 }  // namespace
 
 void savePhotometry(const Photometry& photometry, const std::string& path) {
@@ -290,7 +306,7 @@ void savePhotometry(const Photometry& photometry, const std::string& path) {
   fs << "noise" << static_cast<int>(p.render.noise);
   fs << "seed" << std::to_string(p.render.seed);
   fs << "floor_texture" << floorTextureName(p.floor.texture);
-  fs << "floor_texture_seed" << static_cast<int>(p.floor.texture_seed);
+  fs << "floor_texture_seed" << static_cast<double>(p.floor.texture_seed);
   const Fields fields = fieldsOf(p);
   for (const auto& [key, value] : fields.reals) fs << key << *value;
   for (const auto& [key, value] : fields.integers) fs << key << *value;
@@ -301,23 +317,28 @@ Photometry loadPhotometry(const std::string& path) {
   const cv::FileNode root = fs.root();
   Photometry p;
   try {
+    std::vector<std::string> known = {"name", "speckle_model", "noise",
+                                      "seed", "floor_texture", "floor_texture_seed"};
+    Fields fields = fieldsOf(p);
+    for (const auto& field : fields.reals) known.push_back(field.first);
+    for (const auto& field : fields.integers) known.push_back(field.first);
+    checkKeys(root, "", known);
     readField(root, "name", p.name);
     std::string model = "gaussian", texture = floorTextureName(p.floor.texture);
     std::string seed = std::to_string(p.render.seed);
-    int noise = 1, texture_seed = static_cast<int>(p.floor.texture_seed);
+    int noise = 1;
     readField(root, "speckle_model", model);
     if (model != "gaussian" && model != "gamma")
       throw std::invalid_argument("field 'speckle_model' must be gaussian or gamma");
     p.render.speckle_model = model == "gamma" ? SpeckleModel::Gamma : SpeckleModel::Gaussian;
     readField(root, "noise", noise);
+    if (noise != 0 && noise != 1) throw std::invalid_argument("field 'noise' must be 0 or 1");
     p.render.noise = noise != 0;
     readField(root, "seed", seed);
-    p.render.seed = std::stoull(seed);
+    p.render.seed = parseSeed(seed);
     readField(root, "floor_texture", texture);
     p.floor.texture = floorTextureFromName(texture);
-    readField(root, "floor_texture_seed", texture_seed);
-    p.floor.texture_seed = static_cast<unsigned>(texture_seed);
-    const Fields fields = fieldsOf(p);
+    readField(root, "floor_texture_seed", p.floor.texture_seed);
     for (const auto& [key, value] : fields.reals) readField(root, key, *value);
     for (const auto& [key, value] : fields.integers) readField(root, key, *value);
     p.validate();

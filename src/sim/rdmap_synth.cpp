@@ -25,8 +25,10 @@ void RDMapSynthesizerConfig::validate() const {
 Reference renderFloorReference(const SensorConfig& sensor, const MountConfig& reference_mount,
                                const RenderConfig& render) {
   const Simulator simulator(sensor, render);
+  ReferenceConfig config;
+  config.expected_slits = sensor.projector.slit_count;  // the sensor's own count, not the paper's
   Reference reference =
-      Reference::fromImage(simulator.renderReference(Scene{}, reference_mount).image);
+      Reference::fromImage(simulator.renderReference(Scene{}, reference_mount).image, config);
   reference.setNominalScale(sensor, reference_mount);
   return reference;
 }

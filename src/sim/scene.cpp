@@ -190,8 +190,30 @@ SceneObject SceneObject::box(const std::string& name, const Eigen::Vector3d& cen
   return o;
 }
 
+namespace {
+
+// Every coordinate of a scene within this distance of the origin, every size within kMaxSize: the
+// sensor sees 1.5 m at most, and a NaN or infinite value would make the object vanish.
+constexpr double kMaxCoordinate = 1000.0;  // [m]
+constexpr double kMaxSize = 100.0;         // [m]
+
+void requireInRange(const Eigen::Vector3d& v, double limit, const std::string& who,
+                    const char* field) {
+  if (!(v.array().abs() <= limit).all())
+    throw std::invalid_argument(who + field + " must be finite and within +-" +
+                                std::to_string(static_cast<int>(limit)) + " m");
+}
+
+}  // namespace
+
 void SceneObject::validate() const {
   const std::string who = "scene object '" + name + "': ";
+  requireInRange(centre, kMaxCoordinate, who, "centre");
+  requireInRange(axis_start, kMaxCoordinate, who, "axis_start");
+  requireInRange(axis_end, kMaxCoordinate, who, "axis_end");
+  requireInRange(size, kMaxSize, who, "size");
+  if (!(std::abs(radius) <= kMaxSize)) throw std::invalid_argument(who + "radius must be <= 100 m");
+  if (!(std::abs(yaw) <= 360)) throw std::invalid_argument(who + "yaw must be in [-360, 360] deg");
   if (!(albedo >= 0 && albedo <= 1)) throw std::invalid_argument(who + "albedo must be in [0, 1]");
   if (!(stripe_width >= 0.25 && stripe_width <= 4))
     throw std::invalid_argument(who + "stripe_width must be in [0.25, 4]");
@@ -288,8 +310,8 @@ void Scene::validate() const {
     throw std::invalid_argument("scene: floor.albedo must be in (0, 1]");
   if (!(floor.texture_amplitude >= 0 && floor.texture_amplitude < 1))
     throw std::invalid_argument("scene: floor.texture_amplitude must be in [0, 1)");
-  if (!(floor.texture_scale > 0))
-    throw std::invalid_argument("scene: floor.texture_scale must be > 0");
+  if (!(floor.texture_scale > 0 && floor.texture_scale <= kMaxSize))
+    throw std::invalid_argument("scene: floor.texture_scale must be in (0, 100] m");
   if (!(floor.grout_width >= 0 &&
         (floor.texture != FloorTexture::Tiles || floor.grout_width < 0.5 * floor.texture_scale)))
     throw std::invalid_argument("scene: floor.grout_width must be in [0, texture_scale / 2)");
@@ -301,6 +323,9 @@ void Scene::validate() const {
     throw std::invalid_argument("scene: floor.gloss must be in [0, 10]");
   if (!(floor.stripe_width >= 0.25 && floor.stripe_width <= 4))
     throw std::invalid_argument("scene: floor.stripe_width must be in [0.25, 4]");
+  if (objects.size() > kMaxObjects)
+    throw std::invalid_argument("scene: " + std::to_string(objects.size()) +
+                                " objects, more than the limit of " + std::to_string(kMaxObjects));
   for (const SceneObject& o : objects) o.validate();
 }
 

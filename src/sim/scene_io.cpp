@@ -13,10 +13,25 @@ Eigen::Vector3d readVec3(const cv::FileNode& node, const char* key,
                          const Eigen::Vector3d& fallback) {
   const cv::FileNode n = node[key];
   if (n.empty()) return fallback;
+  const auto number = [&](int i) {
+    if (!n[i].isInt() && !n[i].isReal())
+      throw std::invalid_argument(std::string("field '") + key + "' must be a list of 3 numbers");
+    return static_cast<double>(n[i]);
+  };
   if (!n.isSeq() || n.size() != 3)
     throw std::invalid_argument(std::string("field '") + key + "' must be a list of 3 numbers");
-  return Eigen::Vector3d(static_cast<double>(n[0]), static_cast<double>(n[1]),
-                         static_cast<double>(n[2]));
+  return Eigen::Vector3d(number(0), number(1), number(2));
+}
+
+// The keys an object of each type may have (a key of another type would be ignored).
+void checkObjectKeys(const cv::FileNode& n, const std::string& where, const std::string& type) {
+  if (type == "sphere")
+    checkKeys(n, where, {"type", "name", "centre", "radius", "albedo", "stripe_width"});
+  else if (type == "cylinder")
+    checkKeys(n, where,
+              {"type", "name", "axis_start", "axis_end", "radius", "albedo", "stripe_width"});
+  else if (type == "box")
+    checkKeys(n, where, {"type", "name", "centre", "size", "yaw", "albedo", "stripe_width"});
 }
 
 void writeVec3(cv::FileStorage& fs, const char* key, const Eigen::Vector3d& v) {
@@ -59,16 +74,18 @@ Scene Scene::load(const std::string& path) {
   cv::FileStorage fs = openYamlForRead(path, "scene");
   Scene scene;
   try {
+    checkKeys(fs.root(), "", {"floor", "objects"});
     const cv::FileNode f = fs["floor"];
+    checkKeys(f, "floor",
+              {"texture", "albedo", "texture_amplitude", "texture_scale", "texture_seed",
+               "grout_width", "grout_albedo", "laser_albedo", "gloss", "stripe_width"});
     std::string texture = floorTextureName(scene.floor.texture);
     readField(f, "texture", texture);
     scene.floor.texture = floorTextureFromName(texture);
     readField(f, "albedo", scene.floor.albedo);
     readField(f, "texture_amplitude", scene.floor.texture_amplitude);
     readField(f, "texture_scale", scene.floor.texture_scale);
-    int seed = static_cast<int>(scene.floor.texture_seed);
-    readField(f, "texture_seed", seed);
-    scene.floor.texture_seed = static_cast<unsigned>(seed);
+    readField(f, "texture_seed", scene.floor.texture_seed);
     readField(f, "grout_width", scene.floor.grout_width);
     readField(f, "grout_albedo", scene.floor.grout_albedo);
     readField(f, "laser_albedo", scene.floor.laser_albedo);
@@ -76,9 +93,16 @@ Scene Scene::load(const std::string& path) {
     readField(f, "stripe_width", scene.floor.stripe_width);
     const cv::FileNode list = fs["objects"];
     if (!list.empty() && !list.isSeq()) throw std::invalid_argument("'objects' must be a list");
+    if (list.size() > kMaxObjects)
+      throw std::invalid_argument(std::to_string(list.size()) +
+                                  " objects, more than the limit of " +
+                                  std::to_string(kMaxObjects));
     for (const cv::FileNode& n : list) {
+      const std::string where = "objects[" + std::to_string(scene.objects.size()) + "]";
+      if (!n.isMap()) throw std::invalid_argument("'" + where + "' must be a map of keys");
       std::string type;
       readField(n, "type", type);
+      checkObjectKeys(n, where, type);
       SceneObject o;
       readField(n, "name", o.name);
       if (o.name.empty()) o.name = type + std::to_string(scene.objects.size());
@@ -113,7 +137,7 @@ void Scene::save(const std::string& path) const {
   fs << "texture" << floorTextureName(floor.texture);
   fs << "albedo" << floor.albedo << "texture_amplitude" << floor.texture_amplitude;
   fs << "texture_scale" << floor.texture_scale << "texture_seed"
-     << static_cast<int>(floor.texture_seed);
+     << static_cast<double>(floor.texture_seed);
   fs << "grout_width" << floor.grout_width << "grout_albedo" << floor.grout_albedo;
   fs << "laser_albedo" << floor.laser_albedo << "gloss" << floor.gloss;
   fs << "stripe_width" << floor.stripe_width;

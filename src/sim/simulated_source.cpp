@@ -62,8 +62,10 @@ std::optional<Frame> SimulatorSource::next(std::chrono::milliseconds timeout) {
 Reference SimulatorSource::makeReference(const ReferenceConfig& config) const {
   // The bare floor seen from the reference pose (paper Sec. II-C).
   const Scenario reference = makeScenario("reference");
+  ReferenceConfig c = config;
+  c.expected_slits = simulator_.geometry().config().projector.slit_count;  // what it renders
   Reference ref = Reference::fromImage(
-      simulator_.renderReference(reference.scene, scenario_.reference_mount).image, config);
+      simulator_.renderReference(reference.scene, scenario_.reference_mount).image, c);
   ref.setNominalScale(simulator_.geometry().config(), scenario_.reference_mount);
   return ref;
 }

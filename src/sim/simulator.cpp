@@ -190,8 +190,8 @@ void RenderConfig::validate() const {
   auto require = [](bool ok, const char* field, const char* rule) {
     if (!ok) throw std::invalid_argument(std::string("render config: ") + field + " " + rule);
   };
-  require(laser_peak >= 0, "laser_peak", "must be >= 0");
-  require(ambient >= 0, "ambient", "must be >= 0");
+  require(laser_peak >= 0 && laser_peak <= 100, "laser_peak", "must be in [0, 100] FS");
+  require(ambient >= 0 && ambient <= 100, "ambient", "must be in [0, 100] FS");
   if (speckle_model == SpeckleModel::Gaussian)
     require(speckle_contrast >= 0 && speckle_contrast < 1, "speckle_contrast",
             "must be in [0, 1) (Gaussian speckle)");
@@ -200,7 +200,7 @@ void RenderConfig::validate() const {
             "must be in [0, 1] (gamma speckle)");
   require(speckle_grain >= 0.3 && speckle_grain <= 10, "speckle_grain", "must be in [0.3, 10] px");
   require(blur_sigma >= 0 && blur_sigma <= 10, "blur_sigma", "must be in [0, 10] px");
-  require(full_well >= 100, "full_well", "must be >= 100 e-");
+  require(full_well >= 100 && full_well <= 1e15, "full_well", "must be in [100, 1e15] e-");
   require(read_noise >= 0 && read_noise < 0.5, "read_noise", "must be in [0, 0.5) FS");
   require(bit_depth == 8 || bit_depth == 16, "bit_depth", "must be 8 or 16");
   require(supersample >= 1 && supersample <= 16, "supersample", "must be in [1, 16]");

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <vector>
@@ -72,6 +73,9 @@ struct Hit {
 
 class Scene {
  public:
+  /// Every object is tested by every ray: 20 000 objects took minutes per frame.
+  static constexpr std::size_t kMaxObjects = 1000;
+
   FloorConfig floor;
   std::vector<SceneObject> objects;
 
@@ -90,6 +94,8 @@ class Scene {
   /// "floor", the object's name, or "none".
   std::string objectName(int object) const;
 
+  /// Throws std::invalid_argument naming the field: every value finite and in range, at most
+  /// kMaxObjects objects.
   void validate() const;
   /// YAML (OpenCV FileStorage): floor {albedo, ...} and objects [{type, name, ...}].
   static Scene load(const std::string& path);
