@@ -211,6 +211,7 @@ std::optional<Frame> ImageSequenceSource::next(std::chrono::milliseconds timeout
   if (image.empty() || image.channels() != 1 ||
       (image.depth() != CV_8U && image.depth() != CV_16U)) {
     ++read_errors_;  // missing, corrupt, or not a one-channel 8- or 16-bit image
+    setLastError("cannot read " + file + " as a one-channel 8- or 16-bit image");
     return std::nullopt;
   }
   // A repeated sequence goes on in time: each loop is shifted by the span of the sequence.
