@@ -111,7 +111,9 @@ int runCalibrate(int argc, char** argv) {
   args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
   args.option("min-contrast", "0.06", "slit peak above its background [share of full scale]");
   args.option("slits", "15", "number of slits the projector casts");
-  args.option("camera-id", "", "name of the camera, checked when the calibration is used");
+  args.option("camera-id", "",
+              "serial number (or DeviceID) of the camera; another is refused when the calibration "
+              "is used with a camera");
   args.option("out", "calibration.yaml", "calibration file to write");
   if (!args.parse(argc, argv)) return 0;
   const std::vector<std::string> ref_paths = args.list("reference");
