@@ -1,7 +1,7 @@
 // MultiSlitGrabber when the camera fails (issue 15), over GigE Vision on 127.0.0.1: a camera
 // killed mid-stream is said lost within a second of its last frame and taken up again when a
-// camera comes back on the port; a camera of another size or pixel format than asked is a clear
-// error naming both, in GrabberStats::last_error and the status signal, and never a cloud.
+// camera comes back on the port; a camera of another size, pixel format or serial than asked is
+// a clear error naming both, in GrabberStats::last_error and the status signal, never a cloud.
 #include "gige_sim_support.h"
 #include "multislit/grabber.h"
 
@@ -227,6 +227,35 @@ TEST(GrabberFaults, ACameraSendingAnotherPixelFormatIsAnErrorNamingBothNeverAClo
   EXPECT_EQ(s.source.incomplete, 0u);
   EXPECT_EQ(s.source.losses, 0u);  // broken frames still say the camera is there
   EXPECT_EQ(clouds.clouds(), 0);
+}
+
+// A calibration's camera_id (multislit calibrate --camera-id, AravisConfig::camera_id): only
+// that camera is taken.
+TEST(GrabberFaults, AnotherCameraThanTheCalibrationsIsRefusedNamingBoth) {
+  const SimData& sim = simData();
+  EmulatorConfig ec;
+  ec.serial = "SENSOR-7";
+  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(sim.frames, ec);
+  REQUIRE_EMULATOR(emulator);
+  AravisConfig config = gigeConfig(30);
+  config.camera_id = "SENSOR-3";
+  {
+    MultiSlitGrabber other(std::make_shared<AravisSource>(config), sim.reference);
+    try {
+      other.start();
+      FAIL() << "camera SENSOR-7 was taken for SENSOR-3";
+    } catch (const pcl::IOException& e) {
+      EXPECT_TRUE(contains(e.what(), "'SENSOR-7'") && contains(e.what(), "'SENSOR-3'")) << e.what();
+    }
+    EXPECT_TRUE(contains(other.getStats().last_error, "'SENSOR-3'"));
+  }
+  config.camera_id = "SENSOR-7";
+  MultiSlitGrabber same(std::make_shared<AravisSource>(config), sim.reference);
+  CloudLog clouds(same);
+  same.start();
+  EXPECT_TRUE(waitFor([&] { return clouds.clouds() >= 3; }));
+  same.stop();
+  EXPECT_EQ(clouds.wrong(), 0);
 }
 
 }  // namespace

@@ -314,35 +314,6 @@ TEST(AravisSource, CountsAndSkipsBuffersWithLostPackets) {
   EXPECT_EQ(s.losses, 0u);
 }
 
-// A calibration's camera_id (multislit calibrate --camera-id): only that camera is taken.
-TEST(AravisSource, TakesOnlyTheCameraOfTheCalibrationsCameraId) {
-  const std::vector<cv::Mat> images = noiseImages(2, 160, 120, CV_8UC1);
-  EmulatorConfig ec;
-  ec.serial = "SENSOR-7";
-  const std::unique_ptr<CameraEmulator> emulator = makeEmulator(images, ec);
-  REQUIRE_EMULATOR(emulator);
-  AravisConfig config = cameraConfig(images[0], 30);
-  config.camera_id = "SENSOR-3";
-  AravisSource other(config);
-  try {
-    other.start();
-    FAIL() << "camera SENSOR-7 was taken for SENSOR-3";
-  } catch (const std::runtime_error& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("'SENSOR-7'"), std::string::npos) << what;
-    EXPECT_NE(what.find("'SENSOR-3'"), std::string::npos) << what;
-  }
-  config.camera_id = "SENSOR-7";
-  AravisSource same(config);
-  same.start();
-  std::optional<Frame> frame;
-  const auto t0 = Clock::now();
-  while (!frame && msSince(t0) < kDeadlineMs) frame = same.next(milliseconds(100));
-  same.stop();
-  ASSERT_TRUE(frame);
-  EXPECT_TRUE(identical(frame->image, images[emulator->imageIndex(frame->seq)]));
-}
-
 TEST(AravisSource, SoftwareTriggerDeliversOneFramePerTrigger) {
   const std::vector<cv::Mat> images = noiseImages(2, 160, 120, CV_8UC1);
   const std::unique_ptr<CameraEmulator> emulator = makeEmulator(images);
