@@ -12,7 +12,7 @@
 namespace multislit::cli {
 
 ArgParser::ArgParser(std::string command, std::string summary)
-    : command_(std::move(command)), summary_(std::move(summary)) {}
+    : summary_(std::move(summary)), usage_name_("multislit " + command) {}
 
 void ArgParser::option(const std::string& name, const std::string& default_value,
                        const std::string& help) {
@@ -140,7 +140,7 @@ bool ArgParser::has(const std::string& name) const {
 
 std::string ArgParser::help() const {
   std::ostringstream out;
-  out << "usage: multislit " << command_ << " [options]"
+  out << "usage: " << usage_name_ << " [options]"
       << (positional_name_.empty() ? "" : " " + positional_name_) << "\n\n"
       << summary_ << "\n\noptions:\n";
   for (const std::string& name : order_) {

@@ -5,6 +5,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace multislit::cli {
@@ -18,6 +19,8 @@ struct UsageError : std::runtime_error {
 class ArgParser {
  public:
   ArgParser(std::string command, std::string summary);
+  /// The program the usage line names (default: "multislit <command>").
+  void program(std::string usage_name) { usage_name_ = std::move(usage_name); }
 
   void option(const std::string& name, const std::string& default_value, const std::string& help);
   void flag(const std::string& name, const std::string& help);
@@ -45,7 +48,7 @@ class ArgParser {
     bool is_flag = false;
     bool is_list = false;
   };
-  std::string command_, summary_;
+  std::string summary_, usage_name_;
   std::vector<std::string> order_;
   std::map<std::string, Spec> specs_;
   std::map<std::string, std::string> values_;

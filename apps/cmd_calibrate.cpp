@@ -115,7 +115,9 @@ int runCalibrate(int argc, char** argv) {
   args.option("full-scale", "0",
               "the camera's white [DN], 4095 for 12-bit data in 16-bit images; 0: the image "
               "type's (255 or 65535). Kept in the calibration");
-  args.option("camera-id", "", "name of the camera, checked when the calibration is used");
+  args.option("camera-id", "",
+              "serial number (or DeviceID) of the camera; another is refused when the calibration "
+              "is used with a camera");
   args.option("out", "calibration.yaml", "calibration file to write");
   if (!args.parse(argc, argv)) return 0;
   const std::vector<std::string> ref_paths = args.list("reference");

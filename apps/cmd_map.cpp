@@ -84,6 +84,7 @@ Input openInput(const cli::ArgParser& args) {
     config.frame_rate = args.number("fps", 0.1, 1000);
     config.roi_width = in.reference.image_width;
     config.roi_height = in.reference.image_height;
+    config.camera_id = in.reference.camera_id;  // the camera the calibration was taken with
     in.source = std::make_unique<AravisSource>(config);
   } else {
     ImageSequenceConfig config;

@@ -61,9 +61,19 @@ struct MultiSlitGrabber::Run {
   std::condition_variable changed;
   std::optional<Frame> mailbox;  // the newest frame not yet taken by processing
   bool stop = false;
+  bool status_changed = false;  // the source was lost or came back: processing tells at once
   bool acquisition_done = false;
   bool processing_done = false;
   std::thread acquisition, processing;
+
+  // Sets one of the flags above under the mutex and wakes the threads waiting on them.
+  void raise(bool& flag) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      flag = true;
+    }
+    changed.notify_all();
+  }
 };
 
 // The acquisition thread: source -> mailbox. Never throws; source errors are counted.
@@ -72,6 +82,7 @@ void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
                                        std::shared_ptr<Counters> counters, int poll_ms) {
   const auto poll = std::chrono::milliseconds(poll_ms);
   const bool live = source->live();
+  bool connected = source->connected();
   for (;;) {
     {
       // A source that is not live hands out the next frame only once the last one was taken.
@@ -87,6 +98,10 @@ void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
       error = e.what();
     } catch (...) {
       error = "unknown error";
+    }
+    if (source->connected() != connected) {
+      connected = !connected;
+      run->raise(run->status_changed);
     }
     if (!error.empty()) {
       counters->error(counters->source_errors, source->name() + ": " + error);
@@ -112,11 +127,7 @@ void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
   } catch (...) {
     ++counters->source_errors;
   }
-  {
-    std::lock_guard<std::mutex> lock(run->mutex);
-    run->acquisition_done = true;
-  }
-  run->changed.notify_all();
+  run->raise(run->acquisition_done);
 }
 
 MultiSlitGrabber::MultiSlitGrabber(std::shared_ptr<FrameSource> source, Reference reference,
@@ -156,6 +167,7 @@ MultiSlitGrabber::~MultiSlitGrabber() noexcept {
   disconnect_all_slots<sig_cb_rdmap>();
   disconnect_all_slots<sig_cb_xyz>();
   disconnect_all_slots<sig_cb_frame>();
+  disconnect_all_slots<sig_cb_status>();
 }
 
 void MultiSlitGrabber::start() {
@@ -173,6 +185,7 @@ void MultiSlitGrabber::start() {
   try {
     source_->start();
   } catch (const std::exception& e) {
+    counters_->error(counters_->source_errors, source_->name() + ": " + e.what());
     PCL_THROW_EXCEPTION(pcl::IOException,
                         "[MultiSlitGrabber] cannot start " << source_->name() << ": " << e.what());
   }
@@ -203,11 +216,7 @@ void MultiSlitGrabber::stop() {
     retired_.push_back(run);
     self = run->processing.get_id() == std::this_thread::get_id();
   }
-  {
-    std::lock_guard<std::mutex> lock(run->mutex);
-    run->stop = true;
-  }
-  run->changed.notify_all();
+  run->raise(run->stop);
   source_->interrupt();
 
   // No callback runs after stop() returns, unless stop() was called from one (then the
@@ -266,22 +275,25 @@ GrabberStats MultiSlitGrabber::getStats() const {
   std::tie(s.latency_median_ms, s.latency_p99_ms) = counters_->latencyPercentiles();
   s.source = source_->stats();
   s.connected = source_->connected();
-  std::lock_guard<std::mutex> lock(counters_->timing_mutex);
-  s.last_error = counters_->last_error;
+  s.last_error = counters_->lastError();
   return s;
 }
 
 // The processing thread: mailbox -> extraction -> callbacks.
 void MultiSlitGrabber::processLoop(const std::shared_ptr<Run>& run) {
   const auto poll = std::chrono::milliseconds(config_.poll_ms);
-  bool connected = true;
+  SourceStatus said;  // what the status signal said last: connected, no new error
+  said.error = counters_->lastError();
+  std::string source_error = source_->lastError();
   for (;;) {
-    reportStatus(connected);
+    reportStatus(said, source_error);
     std::optional<Frame> frame;
     {
       std::unique_lock<std::mutex> lock(run->mutex);
-      run->changed.wait_for(lock, poll,
-                            [&] { return run->stop || run->mailbox || run->acquisition_done; });
+      run->changed.wait_for(lock, poll, [&] {
+        return run->stop || run->mailbox || run->acquisition_done || run->status_changed;
+      });
+      run->status_changed = false;  // reportStatus() at the top of the loop tells it
       if (run->stop) break;
       if (!run->mailbox) {
         if (run->acquisition_done) break;
@@ -297,21 +309,29 @@ void MultiSlitGrabber::processLoop(const std::shared_ptr<Run>& run) {
       ++counters_->callback_errors;  // a callback threw; the thread goes on
     }
   }
-  {
-    std::lock_guard<std::mutex> lock(run->mutex);
-    run->processing_done = true;
-  }
-  run->changed.notify_all();
+  run->raise(run->processing_done);
 }
 
-// Fires the status signal when the source's connection changed since `connected`.
-void MultiSlitGrabber::reportStatus(bool& connected) {
-  if (source_->connected() == connected) return;
-  connected = !connected;
+// Takes up a new error of the source (`source_error`: the last one seen), then fires the status
+// signal when the connection or the latest error changed since `said`.
+void MultiSlitGrabber::reportStatus(SourceStatus& said, std::string& source_error) {
+  std::string from_source = source_->lastError();
+  if (from_source != source_error) {
+    source_error = std::move(from_source);
+    if (!source_error.empty()) counters_->note(source_->name() + ": " + source_error);
+  }
+  const bool connected = source_->connected();
+  std::string error = counters_->lastError();
+  if (connected == said.connected && error == said.error) return;
+  said.connected = connected;
+  said.error = std::move(error);
   if (status_signal_->num_slots() == 0) return;
   const SourceStats stats = source_->stats();
+  said.losses = stats.losses;
+  said.reconnects = stats.reconnects;
+  said.source = source_->name();
   try {
-    (*status_signal_)(SourceStatus{connected, stats.losses, stats.reconnects, source_->name()});
+    (*status_signal_)(said);
   } catch (...) {
     ++counters_->callback_errors;
   }
@@ -333,7 +353,7 @@ void MultiSlitGrabber::process(Frame& frame, Run& run) {
           extractor_.extract(frame.image, frame.stamp_us, static_cast<std::uint32_t>(frame.seq));
     } catch (const std::exception& e) {  // the image does not fit the reference
       counters_->error(counters_->extraction_errors,
-                       "frame " + std::to_string(frame.seq) + ": " + e.what());
+                       std::string("frames do not fit the calibration: ") + e.what());
     }
   }
   const Clock::time_point now = Clock::now();

@@ -31,8 +31,17 @@ struct MultiSlitGrabber::Counters {
 
   void error(std::atomic<std::uint64_t>& count, const std::string& what) {
     ++count;
+    note(what);
+  }
+
+  void note(const std::string& what) {
     std::lock_guard<std::mutex> lock(timing_mutex);
     last_error = what;
+  }
+
+  std::string lastError() {
+    std::lock_guard<std::mutex> lock(timing_mutex);
+    return last_error;
   }
 
   void record(Clock::time_point now, double latency) {

@@ -1,6 +1,8 @@
 // FrameSource: the interruptible waits every source shares.
 #include "multislit/sources.h"
 
+#include <utility>
+
 namespace multislit {
 
 const char* stampSourceName(StampSource source) {
@@ -11,6 +13,16 @@ FrameStamp chooseFrameStamp(bool camera_clock_synchronized, std::uint64_t camera
                             std::uint64_t host_ns) {
   if (camera_clock_synchronized && camera_ns > 0) return {camera_ns / 1000, StampSource::Camera};
   return {host_ns / 1000, StampSource::Host};
+}
+
+std::string FrameSource::lastError() const {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  return last_error_;
+}
+
+void FrameSource::setLastError(std::string what) {
+  std::lock_guard<std::mutex> lock(error_mutex_);
+  last_error_ = std::move(what);
 }
 
 void FrameSource::interrupt() {

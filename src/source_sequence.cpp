@@ -207,8 +207,9 @@ std::optional<Frame> ImageSequenceSource::next(std::chrono::milliseconds timeout
   cv::Mat image;
   try {
     image = readMonoImage(file);
-  } catch (const std::runtime_error&) {
+  } catch (const std::runtime_error& e) {
     ++read_errors_;  // missing, corrupt, too large, or not a one-channel 8- or 16-bit image
+    setLastError(e.what());
     return std::nullopt;
   }
   // A repeated sequence goes on in time: each loop is shifted by the span of the sequence.

@@ -309,7 +309,9 @@ TEST(AravisSource, CountsAndSkipsBuffersWithLostPackets) {
   const SourceStats s = source.stats();
   EXPECT_GT(good, 0);
   EXPECT_GT(s.bad_buffers, 0u);
+  EXPECT_EQ(s.incomplete, s.bad_buffers);  // every one lost packets
   EXPECT_EQ(s.frames, static_cast<std::uint64_t>(good));
+  EXPECT_EQ(s.losses, 0u);
 }
 
 TEST(AravisSource, SoftwareTriggerDeliversOneFramePerTrigger) {

@@ -44,17 +44,20 @@ struct GrabberStats {
   double latency_p99_ms = 0.0;          ///< 99th percentile of the same [ms]
   SourceStats source;                   ///< the source's own counts (bad buffers, reconnects)
   bool connected = true;                ///< FrameSource::connected() now
-  /// The latest source or extraction error, e.g. a camera sending frames of another size than
-  /// the calibration's ("" when none).
+  /// The latest error, "" when none: a source call that threw, the source's own
+  /// (FrameSource::lastError(): a camera that cannot be reopened, frames of another size or
+  /// pixel format than asked), frames that do not fit the calibration, or a failed start().
   std::string last_error;
 };
 
-/// The source's state, as the status signal reports each change.
+/// The source's state, as the status signal reports each change of `connected` or `error`.
 struct SourceStatus {
   bool connected = true;         ///< false: the camera stopped sending and is being reopened
   std::uint64_t losses = 0;      ///< times it was lost so far
   std::uint64_t reconnects = 0;  ///< times it came back
   std::string source;            ///< FrameSource::name()
+  /// The latest source or extraction error, as GrabberStats::last_error ("" when none yet).
+  std::string error;
 };
 
 /// A pcl::Grabber for the multi-slit sensor. Signals (each computed only while connected):
@@ -63,7 +66,8 @@ struct SourceStatus {
 ///    only when the reference has a metric scale;
 ///  - sig_cb_frame: the raw image;
 ///  - sig_cb_status: the source lost (a camera that stops sending, noticed after
-///    AravisConfig::lost_after_ms) or back, from the processing thread, within poll_ms of it.
+///    AravisConfig::lost_after_ms) or back, at once, or a new last_error, within poll_ms; from
+///    the processing thread.
 /// header.stamp is the frame's time in microseconds since the epoch, header.seq the source's
 /// frame number. A live source's frames that arrive while a callback is still busy replace the
 /// waiting one (one slot, counted as dropped); other sources wait for the consumer.
@@ -82,7 +86,7 @@ class MultiSlitGrabber : public pcl::Grabber {
   ~MultiSlitGrabber() noexcept override;
 
   /// Opens the source and starts the threads; throws pcl::IOException when the source cannot
-  /// start or an earlier run's source call is still stuck.
+  /// start (kept as GrabberStats::last_error too) or an earlier run's source call is still stuck.
   void start() override;
   void stop() override;
   /// True from start() to stop(), and until a finished source's last frame was delivered.
@@ -105,7 +109,7 @@ class MultiSlitGrabber : public pcl::Grabber {
                               std::shared_ptr<Counters> counters, int poll_ms);
   void processLoop(const std::shared_ptr<Run>& run);
   void process(Frame& frame, Run& run);
-  void reportStatus(bool& connected);
+  void reportStatus(SourceStatus& said, std::string& source_error);
   void reap();
 
   std::shared_ptr<FrameSource> source_;

@@ -21,8 +21,13 @@ namespace multislit {
 
 /// Counts kept by a source; errors of one frame are counted here, never thrown.
 struct SourceStats {
-  std::uint64_t frames = 0;       ///< frames delivered by next()
-  std::uint64_t bad_buffers = 0;  ///< camera buffers with an error status (lost packets), skipped
+  std::uint64_t frames = 0;  ///< frames delivered by next()
+  /// Camera buffers skipped: incomplete ones, and frames of another size or pixel format than
+  /// asked (lastError() says which).
+  std::uint64_t bad_buffers = 0;
+  /// Of those, frames that lost packets on the way (Aravis: missing packets, a frame timeout, a
+  /// wrong packet id, an aborted frame); never delivered, so a cloud is never made of a torn image.
+  std::uint64_t incomplete = 0;
   std::uint64_t read_errors = 0;  ///< failed reads: unreadable files, failed camera (re)opens
   std::uint64_t reconnects = 0;   ///< times a lost camera was opened again
   std::uint64_t losses = 0;       ///< times the camera was lost (no frame while one was due)
@@ -56,6 +61,9 @@ class FrameSource {
   /// False while the device is lost and not yet opened again (a camera that stopped sending);
   /// files and the simulator are always connected.
   virtual bool connected() const { return true; }
+  /// The latest error the source counted instead of throwing (a file it could not read, a camera
+  /// it could not reopen, frames of another size or pixel format than asked); "" when none.
+  std::string lastError() const;
 
   /// Makes a waiting and every later next() return at once, until the next start().
   void interrupt();
@@ -74,8 +82,12 @@ class FrameSource {
                     Clock::time_point deadline);
   /// Takes one pending trigger, waiting for it until `deadline`; false when none came.
   bool takeTrigger(Clock::time_point deadline);
+  /// Keeps `what` as lastError().
+  void setLastError(std::string what);
 
  private:
+  mutable std::mutex error_mutex_;
+  std::string last_error_;
   mutable std::mutex wait_mutex_;
   std::condition_variable wait_cv_;
   bool interrupted_ = false;
@@ -103,20 +115,28 @@ struct AravisConfig {
   int buffer_count = 8;                       ///< stream buffers [-]
   int socket_buffer_bytes = 4 * 1024 * 1024;  ///< GigE stream socket receive buffer [B]
   int packet_size = 0;                        ///< GigE stream packet size [B]; 0: keep the camera's
-  /// No frame for this long while one is due: the camera is lost (connected() false, a status
-  /// signal of the grabber) and reopened with back-off. [ms]
+  /// Nothing from the camera, not even a broken frame, for this long while a frame is due: the
+  /// camera is lost (connected() false, a status signal of the grabber) and reopened with
+  /// back-off. [ms]
   int lost_after_ms = 800;
   int reconnect_delay_ms = 100;       ///< first wait before reopening a lost camera [ms]
   int reconnect_max_delay_ms = 2000;  ///< the wait doubles after each failure up to this [ms]
   /// Stamp frames with the camera's own clock when PTP synchronizes it (PtpEnable or
   /// GevIEEE1588 on, status Master or Slave); false, or no PTP: the host's arrival time.
   bool camera_clock = true;
+  /// When not empty, the camera's serial number (DeviceSerialNumber) or DeviceID must equal this
+  /// (a calibration's camera_id, `multislit calibrate --camera-id`): another camera at the
+  /// address is refused, with an error naming both.
+  std::string camera_id;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
 /// A GigE Vision or USB3 Vision camera through Aravis. A camera that disappears is reopened with
-/// back-off (stats().reconnects); buffers with an error status are counted and skipped. Frame
+/// back-off (stats().reconnects); buffers with an error status are counted and skipped. The
+/// camera must give the region and pixel format asked: one that does not (a smaller sensor, a
+/// format it does not take) is refused when opened, and frames of another size or format are
+/// skipped, each named with what was asked in lastError(). Frame
 /// seq is the camera's frame id (16-bit ids of GigE Vision 1.x unwrapped); stamp_us the camera's
 /// PTP-synchronized clock at exposure when it has one (AravisConfig::camera_clock), else the
 /// host's clock when the buffer arrived; Frame::stamp_source says which, camera_stamp_ns keeps
@@ -151,8 +171,8 @@ class AravisSource : public FrameSource {
   bool trigger_outstanding_ = false;
   std::uint64_t last_id_ = 0, id_wraps_ = 0;  // 16-bit GigE Vision frame ids made monotonic
   std::atomic<StampSource> stamp_source_{StampSource::Host};
-  std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, read_errors_{0}, reconnects_{0},
-      losses_{0};
+  std::atomic<std::uint64_t> frames_{0}, bad_buffers_{0}, incomplete_{0}, read_errors_{0},
+      reconnects_{0}, losses_{0};
   std::atomic<bool> connected_{false};
 };
 

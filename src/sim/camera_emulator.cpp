@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 
 namespace multislit {
@@ -47,14 +48,17 @@ void EmulatorConfig::validate() const {
 }
 
 struct CameraEmulator::Impl {
-  std::vector<cv::Mat> images;  // continuous, same size and type
+  std::vector<cv::Mat> images;                          // continuous, same size and type
+  ArvPixelFormat own_format = ARV_PIXEL_FORMAT_MONO_8;  // the images'
+  bool keep_format = false;
+  std::atomic<double> lost_ratio{0.0};
   std::atomic<std::uint64_t> served{0};
+  // g_object_set() from the camera's thread refs the camera: never while it is being destroyed.
+  std::mutex camera_use;
+  bool closing = false;
   GPtr<ArvGvFakeCamera> camera;  // last: its thread stops before the images go
 
-  std::size_t index(std::uint64_t frame_id) const {
-    // Frame ids on the wire may have 16 bits (GigE Vision 1.x): use those on both ends.
-    return static_cast<std::size_t>(frame_id & 0xffffu) % images.size();
-  }
+  std::size_t index(std::uint64_t frame_id) const { return imageIndex(frame_id, images.size()); }
 
   // Runs on the fake camera's thread for every frame. The buffer reports size 0 here: its
   // capacity is the payload the camera announced, width x height x bytes per pixel, which the
@@ -62,6 +66,20 @@ struct CameraEmulator::Impl {
   static void fill(ArvBuffer* buffer, void* user, guint32 /*exposure_us*/, guint32 /*gain*/,
                    ArvPixelFormat format) {
     auto* self = static_cast<Impl*>(user);
+    // The lost packet ratio of this frame, set here, on the camera's thread that sends it. A
+    // camera keeping its format sends no frame of another one, and takes its own back.
+    const bool foreign = self->keep_format && format != self->own_format;
+    {
+      std::lock_guard<std::mutex> lock(self->camera_use);
+      if (!self->closing)
+        g_object_set(self->camera.get(), "gvsp-lost-ratio", foreign ? 1.0 : self->lost_ratio.load(),
+                     nullptr);
+    }
+    if (foreign) {
+      arv_fake_camera_write_register(arv_gv_fake_camera_get_fake_camera(self->camera.get()),
+                                     ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, self->own_format);
+      return;
+    }
     if (format != ARV_PIXEL_FORMAT_MONO_8 && format != ARV_PIXEL_FORMAT_MONO_16) return;
     gint x = 0, y = 0, width = 0, height = 0;
     arv_buffer_get_image_region(buffer, &x, &y, &width, &height);
@@ -114,19 +132,31 @@ CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
-  arv_fake_camera_write_register(
-      fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
-      impl_->images.front().depth() == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16);
+  impl_->own_format =
+      impl_->images.front().depth() == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
+  impl_->keep_format = config.keep_pixel_format;
+  arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, impl_->own_format);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                  static_cast<guint32>(1e6 / config.fps));
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
   setLostPacketRatio(config.lost_packet_ratio);
 }
 
-CameraEmulator::~CameraEmulator() { impl_->camera.reset(); }
+CameraEmulator::~CameraEmulator() {
+  {
+    std::lock_guard<std::mutex> lock(impl_->camera_use);
+    impl_->closing = true;
+  }
+  impl_->camera.reset();
+}
 
 std::size_t CameraEmulator::imageIndex(std::uint64_t frame_id) const {
   return impl_->index(frame_id);
+}
+
+std::size_t CameraEmulator::imageIndex(std::uint64_t frame_id, std::size_t image_count) {
+  // Frame ids on the wire may have 16 bits (GigE Vision 1.x): use those on both ends.
+  return static_cast<std::size_t>(frame_id & 0xffffu) % image_count;
 }
 
 std::uint64_t CameraEmulator::framesServed() const { return impl_->served; }
@@ -134,7 +164,7 @@ std::uint64_t CameraEmulator::framesServed() const { return impl_->served; }
 void CameraEmulator::setLostPacketRatio(double ratio) {
   if (!(ratio >= 0 && ratio <= 1))
     throw std::invalid_argument("CameraEmulator: lost packet ratio must be in [0, 1]");
-  g_object_set(impl_->camera.get(), "gvsp-lost-ratio", ratio, nullptr);
+  impl_->lost_ratio = ratio;  // the camera's thread applies it to each frame (fill)
 }
 
 }  // namespace multislit

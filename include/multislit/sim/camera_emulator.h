@@ -18,6 +18,11 @@ struct EmulatorConfig {
   std::string serial = "MULTISLIT";  ///< device serial number (at most 15 characters)
   double fps = 30.0;                 ///< frame rate until a client sets its own [Hz]
   double lost_packet_ratio = 0.0;    ///< fraction of stream packets not sent [-]
+  /// Send the images' own pixel format whatever the client sets, as a camera whose PixelFormat
+  /// does not take: the client reads back its own setting, but the frames come in the images'
+  /// format (a frame made in another is not sent). Only a format no larger than the client's
+  /// can come: Mono8 images to a client asking Mono16.
+  bool keep_pixel_format = false;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -34,8 +39,10 @@ class CameraEmulator {
   CameraEmulator& operator=(const CameraEmulator&) = delete;
 
   std::size_t imageIndex(std::uint64_t frame_id) const;
+  /// The same for any emulator serving `image_count` images (one that is gone, or not yet made).
+  static std::size_t imageIndex(std::uint64_t frame_id, std::size_t image_count);
   std::uint64_t framesServed() const;
-  /// 1 makes a camera that answers control requests but sends no image.
+  /// 1 makes a camera that answers control requests but sends no image; from the next frame.
   void setLostPacketRatio(double ratio);
 
  private:
