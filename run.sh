@@ -3,6 +3,8 @@
 #   bash run.sh demo   install what is missing, build (Release, build/), run the main job
 #   bash run.sh test   install what is missing, build, run every test in build/ (Release) and in
 #                      build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)
+#   bash run.sh tsan   install what is missing, build the tests of the threaded code (grabber,
+#                      sources, the walk) in build-tsan/ with ThreadSanitizer and run them
 set -euo pipefail
 
 # ==== THE MAIN JOB: the one command `bash run.sh demo` runs (replace it, keep it one line) ====
@@ -15,7 +17,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")"
 JOBS=$(nproc)
 
 usage() {
-  echo "usage: bash run.sh demo | test" >&2
+  echo "usage: bash run.sh demo | test | tsan" >&2
   exit 2
 }
 
@@ -105,6 +107,17 @@ run_demo() {
   done
 }
 
+# The sanitized builds: -O1 -g1 (line tables: reports keep file and line) compiles in 0.6x the
+# time of -O2 -g; no benchmarks.
+SANITIZED_BUILD=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=ON
+  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DMULTISLIT_BUILD_BENCHMARKS=OFF)
+
+print_times() {
+  section_end
+  echo "== times"
+  printf '   %s\n' "${SUMMARY[@]}"
+}
+
 run_tests() {
   local failed=()
   install_packages
@@ -113,15 +126,11 @@ run_tests() {
   section "testing (release)"
   ctest --test-dir build --output-on-failure -j2 || failed+=("release")
   section "building (ASan+UBSan)"
-  # -O1 -g1 (line tables: reports keep file and line) compiles in 0.6x the time of -O2 -g.
-  configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo -DBUILD_TESTING=ON \
-    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DMULTISLIT_BUILD_BENCHMARKS=OFF
+  configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON "${SANITIZED_BUILD[@]}"
   section "testing (ASan+UBSan)"
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j2 || failed+=("ASan+UBSan")
-  section_end
-  echo "== times"
-  printf '   %s\n' "${SUMMARY[@]}"
+  print_times
   if ((${#failed[@]})); then
     echo "== FAILED: tests of ${failed[*]}" >&2
     exit 1
@@ -129,9 +138,30 @@ run_tests() {
   echo "== all tests passed"
 }
 
+# The tests labelled tsan (tests/CMakeLists.txt) and their programs.
+TSAN_TARGETS=(grabber_test grabber_gige_test sources_test pipeline_test walker_test)
+
+run_tsan() {
+  install_packages
+  section "building (TSan)"
+  configure_and_build build-tsan --target "${TSAN_TARGETS[@]}" -- -DMULTISLIT_TSAN=ON \
+    "${SANITIZED_BUILD[@]}"
+  section "testing (TSan)"
+  local status=0
+  TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$(pwd)/tests/tsan.supp" \
+    ctest --test-dir build-tsan --output-on-failure --no-tests=error -j2 -L tsan || status=$?
+  print_times
+  if ((status)); then
+    echo "== FAILED: tests under ThreadSanitizer" >&2
+    exit 1
+  fi
+  echo "== all tests passed under ThreadSanitizer"
+}
+
 (($# == 1)) || usage
 case $1 in
   demo) run_demo ;;
   test) run_tests ;;
+  tsan) run_tsan ;;
   *) usage ;;
 esac

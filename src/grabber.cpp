@@ -113,10 +113,10 @@ void MultiSlitGrabber::acquisitionLoop(std::shared_ptr<Run> run,
       if (source->finished()) break;
       continue;
     }
-    ++counters->received;
     {
       std::lock_guard<std::mutex> lock(run->mutex);
-      if (run->stop) break;
+      if (run->stop) break;  // a frame that comes after stop() is not received
+      ++counters->received;
       if (run->mailbox) ++counters->dropped;
       run->mailbox = std::move(frame);
     }

@@ -9,13 +9,20 @@
 #include <cstdint>
 #include <cstring>
 
+// An AVX2 and a default version, chosen when the program loads by an ifunc resolver. Not under
+// ThreadSanitizer: GCC instruments the resolver too (__tsan_func_entry), which then runs before
+// TSan's runtime is up and crashes the program in the dynamic loader; one default version there.
+#if defined(__SANITIZE_THREAD__)
+#define MULTISLIT_AVX2_CLONES
+#else
+#define MULTISLIT_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#endif
+
 namespace multislit::simd {
 
-__attribute__((target_clones("avx2", "default"))) unsigned countNear(const float* u, const float* v,
-                                                                     const float* dk,
-                                                                     std::size_t begin,
-                                                                     std::size_t end, float a,
-                                                                     float b, float c, float t) {
+MULTISLIT_AVX2_CLONES unsigned countNear(const float* u, const float* v, const float* dk,
+                                         std::size_t begin, std::size_t end, float a, float b,
+                                         float c, float t) {
   unsigned count = 0;
   for (std::size_t k = begin; k < end; ++k)
     count += std::abs(dk[k] - (a * u[k] + b * v[k] + c)) <= t;
@@ -23,11 +30,8 @@ __attribute__((target_clones("avx2", "default"))) unsigned countNear(const float
 }
 
 // 8 points per step in float, added to double every 256 points.
-__attribute__((target_clones("avx2", "default"))) InlierSums sumInliers(const float* u,
-                                                                        const float* v,
-                                                                        const float* dk,
-                                                                        std::size_t size, float a,
-                                                                        float b, float c, float t) {
+MULTISLIT_AVX2_CLONES InlierSums sumInliers(const float* u, const float* v, const float* dk,
+                                            std::size_t size, float a, float b, float c, float t) {
   typedef float F8 __attribute__((vector_size(32)));
   typedef std::int32_t I8 __attribute__((vector_size(32)));
   constexpr std::size_t kLanes = 8, kFlush = 256;

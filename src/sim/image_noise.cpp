@@ -1,6 +1,8 @@
 // The noise of the rendered image: laser speckle and the camera's shot and read noise.
 #include "sim/image_noise.h"
 
+#include "sim/parallel_rows.h"
+
 #include <boost/math/special_functions/gamma.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -73,7 +75,7 @@ std::vector<float> gammaQuantiles(double contrast) {
 void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
                   const std::vector<float>& gamma_quantiles) {
   cv::Mat speckle(laser.rows, laser.cols, CV_32F);
-  cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
+  parallelRows(laser.rows, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSpeckle);
       float* s = speckle.ptr<float>(r);
@@ -89,7 +91,7 @@ void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
     // The blurred field's std is the sum of the squared 1-D kernel weights (OpenCV's kernel).
     const cv::Mat k = cv::getGaussianKernel(cv::saturate_cast<int>(g * 8 + 1) | 1, g, CV_64F);
     const double scale = 1.0 / k.dot(k), last = static_cast<double>(gamma_quantiles.size() - 1);
-    cv::parallel_for_(cv::Range(0, laser.rows), [&](const cv::Range& rows) {
+    parallelRows(laser.rows, [&](const cv::Range& rows) {
       for (int r = rows.start; r < rows.end; ++r) {
         float* s = speckle.ptr<float>(r);
         for (int c = 0; c < laser.cols; ++c) {
@@ -112,7 +114,7 @@ cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t fr
                      cv::BORDER_REFLECT);
   const double full = render.bit_depth == 8 ? 255.0 : 65535.0;
   cv::Mat image(irradiance.rows, irradiance.cols, render.bit_depth == 8 ? CV_8U : CV_16U);
-  cv::parallel_for_(cv::Range(0, irradiance.rows), [&](const cv::Range& rows) {
+  parallelRows(irradiance.rows, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSensorNoise);
       const float* e = irradiance.ptr<float>(r);

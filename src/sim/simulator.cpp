@@ -1,6 +1,7 @@
 #include "multislit/sim/simulator.h"
 
 #include "sim/image_noise.h"
+#include "sim/parallel_rows.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -118,7 +119,7 @@ CentreSamples traceCentres(const Shader& shader, double reach, double pixel) {
   CentreSamples centre{width, height,
                        std::vector<Shader::Sample>(static_cast<std::size_t>(width) * height),
                        cv::Mat(height, width, CV_32F), cv::Mat(height, width, CV_8U)};
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+  parallelRows(height, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       for (int c = 0; c < width; ++c) {
         const Shader::Sample& s = centre.samples[static_cast<std::size_t>(r) * width + c] =
@@ -160,7 +161,7 @@ cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double
   const int n = shader.render.supersample, width = centre.width, height = centre.height;
   const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 3 * pixel;
   cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+  parallelRows(height, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       for (int c = 0; c < width; ++c) {
         if (!centre.near.ptr<uchar>(r)[c]) continue;
