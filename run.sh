@@ -5,6 +5,8 @@
 #                      build-asan/ (AddressSanitizer + UndefinedBehaviorSanitizer)
 #   bash run.sh tsan   install what is missing, build the tests of the threaded code (grabber,
 #                      sources, the walk) in build-tsan/ with ThreadSanitizer and run them
+#   bash run.sh fuzz [SECONDS]   build the libFuzzer targets of fuzz/ with clang (build-fuzz/) and
+#                      run each for SECONDS (default 60) from its seed corpus
 set -euo pipefail
 
 # ==== THE MAIN JOB: the one command `bash run.sh demo` runs (replace it, keep it one line) ====
@@ -17,7 +19,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")"
 JOBS=$(nproc)
 
 usage() {
-  echo "usage: bash run.sh demo | test | tsan" >&2
+  echo "usage: bash run.sh demo | test | tsan | fuzz [SECONDS]" >&2
   exit 2
 }
 
@@ -158,10 +160,61 @@ run_tsan() {
   echo "== all tests passed under ThreadSanitizer"
 }
 
-(($# == 1)) || usage
+# fuzz_one <target> <seconds>: libFuzzer on a fresh copy of fuzz/corpus/<target>/ in
+# build-fuzz/runs/<target>/; prints its executions and what it found (it stops at its first crash,
+# timeout, leak or memory blow-up, and keeps the input in crashes/). Returns 1 when it found any.
+fuzz_one() {
+  local name=$1 seconds=$2 dir=build-fuzz/runs/$1 extra=() stats runs rate found
+  rm -rf "$dir"
+  mkdir -p "$dir/corpus" "$dir/crashes"
+  cp fuzz/corpus/"$name"/* "$dir/corpus/"
+  case $name in sensor | calibration | scene) extra=(-dict=fuzz/yaml.dict) ;; esac
+  # -timeout: an input running 25 s is a hang; -close_fd_mask=1: the targets' stdout (--help).
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    build-fuzz/fuzz/fuzz_"$name" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 \
+    -close_fd_mask=1 -print_final_stats=1 -artifact_prefix="$dir/crashes/" "${extra[@]}" \
+    "$dir/corpus" </dev/null >"$dir/log" 2>&1 || true
+  stats=$(grep -E '^stat::(number_of_executed_units|average_exec_per_sec):' "$dir/log" || true)
+  runs=$(awk '/number_of_executed_units/ {print $2}' <<<"$stats")
+  rate=$(awk '/average_exec_per_sec/ {print $2}' <<<"$stats")
+  found=$(find "$dir/crashes" -type f | sort)
+  printf '   fuzz_%-12s %10s executions (%s/s), ' "$name" "${runs:-?}" "${rate:-?}"
+  if [[ -z $found ]]; then
+    echo "0 crashes"
+    return 0
+  fi
+  echo "$(wc -l <<<"$found") crash(es): $(tr '\n' ' ' <<<"$found")(log: $dir/log;" \
+    "replay: build-fuzz/fuzz/fuzz_$name FILE)"
+  return 1
+}
+
+run_fuzz() {
+  local seconds=$1 name crashed=()
+  PACKAGES+=(clang libclang-rt-14-dev)
+  install_packages
+  section "building (clang, libFuzzer)"
+  # Our code with -fsanitize=fuzzer-no-link,address,undefined, the targets with -fsanitize=fuzzer
+  # (fuzz/CMakeLists.txt); -O2 -g1: fast, with file and line in reports.
+  CC=clang CXX=clang++ configure_and_build build-fuzz --target fuzz_targets -- -DMULTISLIT_FUZZ=ON \
+    -DBUILD_TESTING=OFF -DMULTISLIT_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -g1"
+  section "fuzzing ($seconds s per target)"
+  while read -r name; do
+    fuzz_one "$name" "$seconds" || crashed+=("fuzz_$name")
+  done <build-fuzz/fuzz/targets.txt
+  print_times
+  if ((${#crashed[@]})); then
+    echo "== FOUND crashes: ${crashed[*]}" >&2
+    exit 1
+  fi
+  echo "== no crash"
+}
+
+(($# == 1)) || [[ $# == 2 && $1 == fuzz && $2 =~ ^[1-9][0-9]*$ ]] || usage
 case $1 in
   demo) run_demo ;;
   test) run_tests ;;
   tsan) run_tsan ;;
+  fuzz) run_fuzz "${2:-60}" ;;
   *) usage ;;
 esac

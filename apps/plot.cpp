@@ -59,7 +59,9 @@ void drawBarChart(const std::string& path, const std::string& title, const std::
   double top = 0;
   for (std::size_t i = 0; i < values.size(); ++i)
     top = std::max(top, values[i] + (i < errors.size() ? errors[i] : 0.0));
-  const auto [y_max, step] = axis(1.15 * top);
+  // Named variables, not a structured binding: C++17 lambdas (py) cannot capture one (clang).
+  const std::pair<double, double> y_axis = axis(1.15 * top);
+  const double y_max = y_axis.first, step = y_axis.second;
   cv::Mat img = frame(title, y_label, y_max, step);
   const int h = kHeight - kTop - kBottom, w = kWidth - kLeft - kRight;
   const int n = static_cast<int>(values.size()), slot = n > 0 ? w / n : w;
@@ -91,7 +93,8 @@ void drawLinePlot(const std::string& path, const std::string& title, const std::
     for (double v : s.values) top = std::max(top, v);
     n = std::max(n, s.values.size());
   }
-  const auto [y_max, step] = axis(1.1 * top);
+  const std::pair<double, double> y_axis = axis(1.1 * top);
+  const double y_max = y_axis.first, step = y_axis.second;
   cv::Mat img = frame(title, y_label, y_max, step);
   const int h = kHeight - kTop - kBottom, w = kWidth - kLeft - kRight;
   auto px = [&](std::size_t i) {

@@ -1,6 +1,7 @@
 #include "multislit/odometry.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -43,7 +44,11 @@ OdometrySample parseRow(const std::string& line, const std::string& at) {
     throw std::runtime_error(at + ": stamp_us '" + cells[0] +
                              "' is not a whole number of microseconds >= 0");
   OdometrySample s;
-  s.stamp_us = static_cast<std::uint64_t>(std::strtoull(cells[0].c_str(), nullptr, 10));
+  // Digits: exact to the microsecond, above 2^53 too; else (1e5, 100000.0) the whole double.
+  const bool digits = std::all_of(cells[0].begin(), cells[0].end(),
+                                  [](unsigned char c) { return std::isdigit(c) != 0; });
+  s.stamp_us = digits ? static_cast<std::uint64_t>(std::strtoull(cells[0].c_str(), nullptr, 10))
+                      : static_cast<std::uint64_t>(v[0]);
   s.world_from_robot.linear() = fromRollPitchYaw(v[4], v[5], v[6]);
   s.world_from_robot.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
   return s;
@@ -144,7 +149,12 @@ std::optional<Eigen::Isometry3d> Odometry::at(std::uint64_t stamp_us, PoseMiss* 
 }
 
 Eigen::Vector3d rollPitchYaw(const Eigen::Matrix3d& r) {
-  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  const double cos_pitch = std::hypot(r(0, 0), r(1, 0));
+  const double pitch = std::atan2(-r(2, 0), cos_pitch);
+  // Pitched +-90 deg (gimbal lock) only yaw -+ roll is defined, and the entries the two angles
+  // come from are rounding noise: roll 0 and that angle as yaw (fuzz/fuzz_odometry: the file
+  // written back gave another rotation). Below 1e-8 the error of either way is under 1e-8.
+  if (cos_pitch < 1e-8) return {0.0, pitch, std::atan2(-r(0, 1), r(1, 1))};
   return {std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0))};
 }
 

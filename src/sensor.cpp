@@ -24,6 +24,9 @@ void SensorConfig::validate() const {
   require(c.height >= 16 && c.height <= kMaxImageSide, "camera.height", sides);
   require(c.pixel_size > 0 && c.pixel_size < 1e-3, "camera.pixel_size", "must be in (0, 1e-3) m");
   require(c.focal_length > 0 && c.focal_length < 1.0, "camera.focal_length", "must be in (0, 1) m");
+  // Image rows and columns of rays are f times a tangent: f bounded keeps them in an int.
+  require(c.f() >= 1 && c.f() <= 1e6, "camera.focal_length",
+          "over pixel_size (f, the focal length in pixels) must be in [1, 1e6] px");
   require(c.principal_x < c.width, "camera.principal_x", "must lie inside the image");
   require(c.principal_y < c.height, "camera.principal_y", "must lie inside the image");
   const ProjectorConfig& p = projector;

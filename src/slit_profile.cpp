@@ -118,8 +118,10 @@ ProfilePass profilePass(const T* row, int lo, int hi, int top, const Background&
   return {width, used, {s0, s1, s2, s3, s4}, {r0, r1, r2}};
 }
 
-// Caruana's Gaussian fit: ln(v) = a + b x + c x^2, weighted by v^2; centre -b / 2c.
-bool gaussianCentre(const ProfilePass& pass, int top, int span, double* centre) {
+// Caruana's Gaussian fit: ln(v) = a + b x + c x^2, weighted by v^2; centre -b / 2c, kept when it
+// lies among the pixels fitted, [first, last] (fuzz/fuzz_image: a fit up to the window's width
+// beyond them put a profile cut by the image's edge 3 px outside the image).
+bool gaussianCentre(const ProfilePass& pass, int top, int first, int last, double* centre) {
   if (pass.used < 3) return false;
   const double* s = pass.s;
   const double* r = pass.r;
@@ -136,7 +138,7 @@ bool gaussianCentre(const ProfilePass& pass, int top, int span, double* centre) 
                    det;
   if (!(c < 0)) return false;
   const double offset = -b / (2 * c);
-  if (!(std::abs(offset) <= span)) return false;
+  if (!(offset >= first - top && offset <= last - top)) return false;
   *centre = top + offset;
   return true;
 }
@@ -223,7 +225,7 @@ bool measurePeakAt(const T* row, int columns, int top, const ProfileParams& p, P
   if (p.estimator == Estimator::Windowed) {
     centre = windowedCentroid(row, first, last, centroid(row, first, last, bg, floor), bg,
                               p.window_sigma);
-  } else if (!fit || !gaussianCentre(pass, top, last - first, &centre)) {
+  } else if (!fit || !gaussianCentre(pass, top, first, last, &centre)) {
     centre = centroid(row, first, last, bg, floor);
   }
   peak->centre = centre;

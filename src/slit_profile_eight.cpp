@@ -236,8 +236,8 @@ inline __attribute__((target("avx2,fma"), always_inline)) void eightCentres(cons
         fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, det), _mm256_set1_pd(1e-12), _CMP_GE_OQ));
     fitted = _mm256_and_pd(fitted, _mm256_xor_pd(nc, det));  // sign bit: unlike signs
     fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(nc, _mm256_setzero_pd(), _CMP_NEQ_OQ));
-    fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, offset),
-                                                 _mm256_set1_pd(2.0 * hw), _CMP_LE_OQ));
+    fitted = _mm256_and_pd(
+        fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, offset), _mm256_set1_pd(hw), _CMP_LE_OQ));
     const __m256d centre = fourInts(tops + 4 * h) + offset;
     _mm256_store_pd(
         out + 4 * h,

@@ -127,8 +127,8 @@ inline __attribute__((target("avx2"), always_inline)) __m256d fourFit(const Four
   fitted = _mm256_and_pd(
       fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, det), _mm256_set1_pd(1e-12), _CMP_NLT_UQ));
   fitted = _mm256_and_pd(fitted, _mm256_cmp_pd(c, _mm256_setzero_pd(), _CMP_LT_OQ));
-  return _mm256_and_pd(fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, *offset),
-                                             _mm256_set1_pd(2.0 * hw), _CMP_LE_OQ));
+  return _mm256_and_pd(
+      fitted, _mm256_cmp_pd(_mm256_andnot_pd(magnitude, *offset), _mm256_set1_pd(hw), _CMP_LE_OQ));
 }
 
 template <typename T>

@@ -220,6 +220,23 @@ TEST(Extractor, DefaultEstimatorIsTheMeasuredBest) {
   EXPECT_LE(quantile(errors[chosen], 0.5), quantile(errors[Estimator::Centroid], 0.5));
 }
 
+// Found by fuzz/fuzz_image: the Gaussian fit of a profile cut by the image's edge was kept up to
+// the window's width beyond the pixels fitted, and the slit was measured 3 px outside the image.
+// A fit whose centre lies outside the pixels fitted now falls back to the centroid.
+TEST(Extractor, AProfileCutByTheImageEdgeIsMeasuredInsideTheImage) {
+  constexpr int kColumns = 40;
+  std::uint8_t row[kColumns];
+  for (int x = 0; x < kColumns; ++x)  // a slit centred at 41.5, past the last column (39)
+    row[x] =
+        static_cast<std::uint8_t>(std::lround(10 + 200 * std::exp(-(x - 41.5) * (x - 41.5) / 18)));
+  ProfileParams p;
+  p.half_window = 5;
+  Peak peak;
+  ASSERT_TRUE(measurePeak(row, kColumns, 30, kColumns - 1, p, &peak));
+  EXPECT_GE(peak.centre, 39 - p.half_window);
+  EXPECT_LE(peak.centre, kColumns - 1);
+}
+
 // measurePeaks() measures eight 8-bit profiles at a time in float lanes where the CPU has AVX2
 // and FMA: it must find the same profiles as measurePeak(), one by one in double, and place them
 // within float rounding, on the floor and on obstacles.

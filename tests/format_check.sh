@@ -9,7 +9,7 @@ if [[ -z $clang_format || $clang_format == *NOTFOUND || ! -x $clang_format ]]; t
   exit 77
 fi
 cd "$src"
-mapfile -d '' files < <(find src include apps filters tests -type f \
+mapfile -d '' files < <(find src include apps filters tests fuzz -type f \
   \( -name '*.cpp' -o -name '*.h' -o -name '*.hpp' \) -print0 2>/dev/null | sort -z)
 if ((${#files[@]} == 0)); then
   echo "no sources found under $src" >&2

@@ -55,6 +55,35 @@ TEST(Odometry, SavedFileReadsBackTheSamePoses) {
   }
 }
 
+// Found by fuzz/fuzz_odometry: pitched 90 deg, roll and yaw were taken from rounding noise, and
+// the file written back held another rotation (0.1 apart in the matrix).
+TEST(Odometry, APoseAtGimbalLockIsWrittenAndReadBackTheSame) {
+  for (const double pitch : {M_PI / 2, -M_PI / 2, M_PI / 2 - 1e-9, M_PI / 2 - 1e-7}) {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.linear() = fromRollPitchYaw(0.3, pitch, -3.1);
+    const auto path = writeFile("gimbal.csv", "");
+    saveOdometry(path.string(), {{1000, t}});
+    const Odometry back = Odometry::load(path.string());
+    EXPECT_LT((back.samples()[0].world_from_robot.linear() - t.linear()).cwiseAbs().maxCoeff(),
+              1e-8)
+        << "pitch " << pitch;
+  }
+}
+
+// Read while writing fuzz/fuzz_odometry: a stamp such as 1e5 passed the whole-number check as a
+// double and was then read as an integer up to the 'e': 1 us instead of 100000.
+TEST(Odometry, AStampInExponentFormIsReadWhole) {
+  const std::string header = "stamp_us,x,y,z,roll,pitch,yaw\n";
+  const Odometry odometry =
+      Odometry::load(writeFile("exponent.csv", header + "1e5,0,0,0,0,0,0\n100001.0,0,0,0,0,0,0\n"
+                                                        "1796209002323686,0,0,0,0,0,0\n")
+                         .string());
+  ASSERT_EQ(odometry.samples().size(), 3u);
+  EXPECT_EQ(odometry.samples()[0].stamp_us, 100000u);
+  EXPECT_EQ(odometry.samples()[1].stamp_us, 100001u);
+  EXPECT_EQ(odometry.samples()[2].stamp_us, 1796209002323686u);
+}
+
 TEST(Odometry, InterpolatesPositionLinearlyAndYawOnTheShorterArc) {
   const Odometry odometry({{1000, pose(0.0, 0.0, 3.0)}, {2000, pose(1.0, 2.0, -3.0)}});
   const auto mid = odometry.at(1250);

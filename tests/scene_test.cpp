@@ -63,6 +63,23 @@ TEST(Scene, FloorTextureVariesAroundItsMean) {
   EXPECT_LE(hi - lo, 2 * scene.floor.texture_amplitude * scene.floor.albedo + 1e-12);
 }
 
+// Found by fuzz/fuzz_scene: a texture of 1e-20 m put the noise lattice out of the range of an
+// int64 (undefined behaviour, reported by the sanitizer build); so does a floor point far away.
+TEST(Scene, FloorTextureStaysInRangeForAnyScaleAndDistance) {
+  for (const FloorTexture texture : {FloorTexture::Wood, FloorTexture::Tiles, FloorTexture::Carpet})
+    for (const double scale : {1.2e-20, 0.012, 1e20}) {
+      Scene scene;
+      scene.floor.texture = texture;
+      scene.floor.texture_scale = scale;
+      scene.floor.grout_width = 0;
+      for (const double x : {0.3, -4e3, 1e15}) {
+        const double a = scene.albedo(0, Eigen::Vector3d(x, 0.25 * x, 0));
+        EXPECT_GE(a, 0.0) << floorTextureName(texture) << " scale " << scale << " at " << x;
+        EXPECT_LE(a, 1.0) << floorTextureName(texture) << " scale " << scale << " at " << x;
+      }
+    }
+}
+
 TEST(Scene, YamlRoundTripAndBadFieldsNamed) {
   const Scenario s = makeScenario("fig8");
   const std::string path =

@@ -55,6 +55,12 @@ TEST(SensorConfig, BadFieldIsNamed) {
   c = SensorConfig{};
   c.mount.tilt = 120;
   EXPECT_NE(validationMessage(c).find("mount.tilt"), std::string::npos);
+  // Found by fuzz/fuzz_sensor: f = 1e29 px put slit rows out of an int's range (undefined).
+  c = SensorConfig{};
+  c.camera.pixel_size = 3.75e-32;
+  EXPECT_NE(validationMessage(c).find("camera.focal_length over pixel_size"), std::string::npos);
+  c.camera.pixel_size = 1e-3 * (1 - 1e-9);  // f = 4 px: a wide lens, still valid
+  EXPECT_EQ(validationMessage(c), "");
 }
 
 TEST(SensorConfig, YamlRoundTripAndErrorsNameTheFile) {
@@ -126,6 +132,53 @@ TEST(SensorConfig, DeeplyNestedFilesAreRefusedBeforeParsing) {
   }
   std::ofstream(path) << "%YAML:1.0\n---\n# a comment [[[[ is no nesting\nmount:\n  tilt: 60\n";
   EXPECT_DOUBLE_EQ(SensorConfig::load(path).mount.tilt, 60.0);
+  std::remove(path.c_str());
+}
+
+// Found by fuzz/fuzz_sensor: on an empty key in a flow map OpenCV's parser throws
+// std::length_error, which escaped the loaders (they promise std::runtime_error naming the file).
+TEST(SensorConfig, AFileTheParserFailsOnIsARuntimeErrorNamingIt) {
+  const std::string path = tempPath("length_error.yaml");
+  std::ofstream(path) << "%YAML:1.0\n---\ncamera: {width: 1296, : 2}\n";
+  try {
+    SensorConfig::load(path);
+    FAIL() << "a malformed file was loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("'" + path + "' is not valid YAML"), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
+}
+
+// Found by fuzz/fuzz_sensor: OpenCV's parser loops forever when the first map ends before the
+// file and a line starting with '-' follows, and reads before its buffer on a line starting with
+// ':'. Such files are refused before parsing, naming the line.
+TEST(SensorConfig, FilesTheParserHangsOnAreRefusedBeforeParsing) {
+  const std::string path = tempPath("layout.yaml");
+  const auto error = [&path](const std::string& text) {
+    std::ofstream(path) << text;
+    try {
+      SensorConfig::load(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  const std::string first_key = "line 2 must be the first key of a map, at the start of the line";
+  EXPECT_NE(error("%YAML:1.\n---s:0\n-#\n-").find(first_key), std::string::npos);  // the hang
+  EXPECT_NE(error("%YAML:1.0\n   mount:\n     tilt: 60\n-x\n").find(first_key), std::string::npos);
+  EXPECT_NE(error("%YAML:1.0\n{mount: {tilt: 60}}\n").find(first_key), std::string::npos);
+  EXPECT_NE(error("%YAML:1.0\n...\n-M---\n").find(first_key), std::string::npos);
+  EXPECT_NE(error(std::string("%YAML:1.\0\ns\n -s\ns\n-", 19)).find("line 1 holds a NUL byte"),
+            std::string::npos);  // found by fuzz/fuzz_scene: another way to the endless loop
+  EXPECT_NE(error("%YAML:1.0\n---\n---\nmount:\n").find("line 3 starts a second document"),
+            std::string::npos);  // (its top level a list, on which Scene::load threw cv::Exception)
+  EXPECT_NE(error("%YAML:1.0\nmount:\n  tilt: 60\n...\n-x\n").find("line 4 ends the document"),
+            std::string::npos);
+  EXPECT_NE(error("%YAML:1.0\nmount:\n  tilt: 60\n  : 2\n").find("line 4 starts with ':'"),
+            std::string::npos);
+  EXPECT_NE(error("%YAML:1.0\nmount:\n  : 2\n").find(path), std::string::npos);
+  EXPECT_EQ(error("%YAML:1.0\n--- # a comment\n\n# a comment\nmount:\n  tilt: 60\n"), "loaded");
   std::remove(path.c_str());
 }
 

@@ -15,6 +15,13 @@ namespace multislit {
 /// x, y, z are metres in the sensor (camera) frame; u, v the reference position of the point
 /// (sub-pixel column, image row); dk = u' - u the relative disparity [px], positive when the
 /// surface is nearer than the reference plane; slit the slit index (0 .. 14).
+// PCL_ADD_POINT4D is an anonymous struct in a union, an extension PCL's point types rely on: clang
+// warns at its expansion here (GCC not, the macro being from a system header).
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wgnu-anonymous-struct"
+#pragma clang diagnostic ignored "-Wnested-anon-types"
+#endif
 struct EIGEN_ALIGN16 PointRDM {
   PCL_ADD_POINT4D;    // x, y, z [m]
   float u;            ///< reference column [px]
@@ -23,6 +30,9 @@ struct EIGEN_ALIGN16 PointRDM {
   std::int32_t slit;  ///< slit index
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
 
 /// True when the point has a metric position: x, y and z finite (the reference has a metric scale
 /// and the point was measured).

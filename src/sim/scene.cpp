@@ -21,9 +21,16 @@ double hash01(int64_t x, int64_t y, uint64_t seed) {
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 
+// The lattice cell of a floored coordinate, wrapped modulo 2^62: any finite coordinate (a floor
+// point near the horizon, a texture of 1e-20 m: fuzz/fuzz_scene) converts to an integer without
+// overflow, which is undefined; the pattern repeats after 2^62 cells. Not finite: cell 0.
+int64_t latticeCell(double floored) {
+  return std::isfinite(floored) ? static_cast<int64_t>(std::fmod(floored, 0x1p62)) : 0;
+}
+
 double valueNoise(double x, double y, uint64_t seed) {
   const double fx = std::floor(x), fy = std::floor(y);
-  const auto ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
+  const int64_t ix = latticeCell(fx), iy = latticeCell(fy);
   const double tx = x - fx, ty = y - fy;
   const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
   const double a = hash01(ix, iy, seed), b = hash01(ix + 1, iy, seed);
@@ -47,8 +54,7 @@ double tileAlbedo(const FloorConfig& f, double x, double y) {
   const double fx = std::floor(gx), fy = std::floor(gy);
   const double edge = s * std::min({gx - fx, 1 - (gx - fx), gy - fy, 1 - (gy - fy)});
   if (edge < 0.5 * f.grout_width) return f.grout_albedo;
-  const double shade =
-      2 * hash01(static_cast<int64_t>(fx), static_cast<int64_t>(fy), f.texture_seed) - 1;
+  const double shade = 2 * hash01(latticeCell(fx), latticeCell(fy), f.texture_seed) - 1;
   const double mottle = valueNoise(x / 0.01, y / 0.01, f.texture_seed + 3);
   return f.albedo * (1.0 + f.texture_amplitude * shade + 0.03 * mottle);
 }
