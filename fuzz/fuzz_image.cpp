@@ -1,10 +1,11 @@
-// Fuzz target: an image file as the command reads it (apps::readMonoImage: OpenCV's decoders, then
-// the checks of a one-channel 8- or 16-bit image), extracted against a fixed reference: the
-// calibration of the quarter-size sensor in corpus/calibration/small.yaml (corpus/README.md).
+// Fuzz target: an image file as the commands read it (readMonoImage: the size from its header,
+// OpenCV's decoders, then the checks of a one-channel 8- or 16-bit image), extracted against a
+// fixed reference: the calibration of the quarter-size sensor in corpus/calibration/small.yaml
+// (corpus/README.md).
 #include "fuzz_support.h"
 
-#include "common.h"
 #include "multislit/extractor.h"
+#include "multislit/image_file.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -17,9 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string path = fuzz::writeInput("image", data, size);
   cv::Mat image;
   try {
-    image = apps::readMonoImage(path);
+    image = readMonoImage(path);
   } catch (const std::runtime_error&) {
-    return 0;  // not an image, corrupt, or not one-channel 8- or 16-bit
+    return 0;  // not an image, too large, corrupt, or not one-channel 8- or 16-bit
   }
   pcl::PointCloud<PointRDM> cloud;
   try {
