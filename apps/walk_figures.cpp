@@ -120,7 +120,9 @@ struct TopView {
 };
 
 TopView fit(const TopViewContent& c, cv::Size* size) {
-  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  // No path (a walk stopped before its first frame): the view around the start.
+  Eigen::Vector2d lo = c.path.empty() ? Eigen::Vector2d::Zero() : Eigen::Vector2d(1e9, 1e9);
+  Eigen::Vector2d hi = c.path.empty() ? Eigen::Vector2d::Zero() : Eigen::Vector2d(-1e9, -1e9);
   for (const Pose2D& p : c.path) {
     lo = lo.cwiseMin(p.position());
     hi = hi.cwiseMax(p.position());
