@@ -68,11 +68,6 @@ whole_lines w/obstacles.csv 23
 grep -q "interrupted (Ctrl-C) at frame" w/summary.txt || fail "walk: no summary"
 [[ -s w/map.bt && -s w/map_top.png ]] || fail "walk: no map"
 echo "walk: interrupted after $(($(wc -l <w/obstacles.csv) - 1)) whole rows, summary and map"
-# Before its first frame (the top view of an empty path once looped in cv::line for ever).
-interrupt walk0 0.2 "$M" walk --synthesize --frames 100000 --out w0
-[[ -s w0/map_top.png ]] && grep -q "interrupted (Ctrl-C) at frame" w0/summary.txt ||
-  fail "walk interrupted before its first frame: no map_top.png or summary"
-echo "walk: interrupted before its first frame, summary and map"
 interrupt simulate 4 "$M" simulate --scenario floor --frames 10000 --out sim
 whole_lines sim/frames.csv 10
 pngs=$(ls sim/frame_*.png | wc -l)
