@@ -2,6 +2,8 @@
 // of an image in which its own slits are drawn 1.5 px to the right.
 #include "fuzz_support.h"
 
+#include <optional>
+
 #include "multislit/extractor.h"
 #include "multislit/reference.h"
 
@@ -36,15 +38,11 @@ cv::Mat imageOfSlits(const Reference& ref) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::string path = fuzz::writeInput("calibration.yaml", data, size);
-  Reference ref;
-  try {
-    ref = Reference::load(path);
-  } catch (const std::invalid_argument&) {
-    return 0;  // a bad value, named
-  } catch (const std::runtime_error&) {
-    return 0;  // not YAML, too large or too deep
-  }
+  const std::optional<Reference> loaded =
+      fuzz::loadInput("calibration.yaml", data, size,
+                      [](const std::string& path) { return Reference::load(path); });
+  if (!loaded) return 0;  // refused, naming the value or the file
+  const Reference& ref = *loaded;
   ref.validate();  // load() validated: must not throw
   if (static_cast<long long>(ref.image_width) * ref.image_height > kMaxExtractedPixels) return 0;
   const Extractor extractor(ref);

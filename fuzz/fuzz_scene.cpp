@@ -3,6 +3,8 @@
 // 336 pixels, so that a render costs about a millisecond.
 #include "fuzz_support.h"
 
+#include <optional>
+
 #include "multislit/sim/scene.h"
 #include "multislit/sim/simulator.h"
 
@@ -33,15 +35,10 @@ const Simulator& smallSimulator() {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const Simulator& simulator = smallSimulator();
-  const std::string path = fuzz::writeInput("scene.yaml", data, size);
-  Scene scene;
-  try {
-    scene = Scene::load(path);
-  } catch (const std::invalid_argument&) {
-    return 0;  // a bad value, named
-  } catch (const std::runtime_error&) {
-    return 0;  // not YAML, too large or too deep
-  }
+  const std::optional<Scene> loaded = fuzz::loadInput(
+      "scene.yaml", data, size, [](const std::string& path) { return Scene::load(path); });
+  if (!loaded) return 0;  // refused, naming the value or the file
+  const Scene& scene = *loaded;
   const CameraConfig& camera = simulator.geometry().config().camera;
   const RenderedFrame frame = simulator.render(scene, simulator.geometry().robotFromCamera());
   fuzz::expect(frame.image.cols == camera.width && frame.image.rows == camera.height,

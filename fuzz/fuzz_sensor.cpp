@@ -2,6 +2,8 @@
 // user of a sensor computes from it: slit rows, rays, projections, the mount.
 #include "fuzz_support.h"
 
+#include <optional>
+
 #include "multislit/sensor.h"
 
 #include <cmath>
@@ -10,15 +12,10 @@
 using namespace multislit;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::string path = fuzz::writeInput("sensor.yaml", data, size);
-  SensorConfig sensor;
-  try {
-    sensor = SensorConfig::load(path);
-  } catch (const std::invalid_argument&) {
-    return 0;  // a bad value, named
-  } catch (const std::runtime_error&) {
-    return 0;  // not YAML, too large or too deep
-  }
+  const std::optional<SensorConfig> loaded = fuzz::loadInput(
+      "sensor.yaml", data, size, [](const std::string& path) { return SensorConfig::load(path); });
+  if (!loaded) return 0;  // refused, naming the value or the file
+  const SensorConfig& sensor = *loaded;
   sensor.validate();  // load() validated: must not throw
   const SensorGeometry g(sensor);
   const CameraConfig& c = sensor.camera;

@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace multislit::fuzz {
@@ -56,6 +58,22 @@ inline void expect(bool ok, const char* what) {
   if (ok) return;
   std::fprintf(stderr, "fuzz: broken promise: %s\n", what);
   std::abort();
+}
+
+/// The input written as `name` and read by `load` (a loader taking a path): nothing when the loader
+/// refuses it, as it must a bad value (std::invalid_argument) or a file that is not YAML, too large
+/// or too deep (std::runtime_error); any other exception is a finding.
+template <typename Load>
+auto loadInput(const std::string& name, const std::uint8_t* data, std::size_t size, Load load)
+    -> std::optional<decltype(load(std::string()))> {
+  const std::string path = writeInput(name, data, size);
+  try {
+    return load(path);
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  } catch (const std::runtime_error&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace multislit::fuzz
