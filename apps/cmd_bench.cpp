@@ -1,6 +1,7 @@
 // multislit bench: the time of every stage of the pipeline on one core, against the stock PCL
 // path on the same frames (issue 7), with the agreement of the two paths' detections.
 #include "bench_input.h"
+#include "bench_render.h"
 #include "bench_run.h"
 #include "bench_soak.h"
 #include "bench_stock.h"
@@ -278,6 +279,28 @@ std::vector<int> parseScales(const std::string& text) {
   return scales;
 }
 
+// The options of `multislit bench`.
+void addBenchOptions(cli::ArgParser& args) {
+  addReferenceOptions(args);
+  args.option("sequence", "", "folder of PNG frames (with a reference option); default: simulate");
+  args.option("scenario", "cable", "simulated walking scenario");
+  args.option("frames", "40", "simulated frames, rendered once");
+  args.option("step", "0.008", "simulated advance per frame [m]; the cable crosses the view");
+  args.option("scale", "1", "points per frame, times the paper's sensor: 1, 2, 4 or a list");
+  args.option("passes", "",
+              "timed passes over the frames: 20 (the stock path: a quarter), 1 with --render");
+  args.option("tolerance", "0.1", "share of differing obstacle points two agreeing frames allow");
+  args.option("cpu", "-1", "CPU to pin to; -1: the one the command starts on");
+  args.option("out", "", "CSV file of the table");
+  args.option("soak", "0",
+              "instead of timing: run the whole chain over this many frames (the rendered ones "
+              "in turn) sampling resident memory; rc 1 when it grows over 5 % after warm-up");
+  args.option("soak-png", "", "figure of the soak's memory curve (PNG)");
+  args.flag("render",
+            "instead: time the simulator's rendering of --frames frames of the walk on every "
+            "core, the renderer before (exhaustive) next to today's (culled)");
+}
+
 }  // namespace
 
 int runBench(int argc, char** argv) {
@@ -287,29 +310,19 @@ int runBench(int argc, char** argv) {
       "per second and peak memory, and the stock PCL path on the same frames: SACSegmentation\n"
       "(SACMODEL_PLANE) on x, y, z, EuclideanClusterExtraction on a KdTree and\n"
       "OcTree::insertPointCloud; prints the speed-up and how often both detect the same.");
-  addReferenceOptions(args);
-  args.option("sequence", "", "folder of PNG frames (with a reference option); default: simulate");
-  args.option("scenario", "cable", "simulated walking scenario");
-  args.option("frames", "40", "simulated frames, rendered once");
-  args.option("step", "0.008", "simulated advance per frame [m]; the cable crosses the view");
-  args.option("scale", "1", "points per frame, times the paper's sensor: 1, 2, 4 or a list");
-  args.option("passes", "20", "timed passes over the frames (the stock path: a quarter)");
-  args.option("tolerance", "0.1", "share of differing obstacle points two agreeing frames allow");
-  args.option("cpu", "-1", "CPU to pin to; -1: the one the command starts on");
-  args.option("out", "", "CSV file of the table");
-  args.option("soak", "0",
-              "instead of timing: run the whole chain over this many frames (the rendered ones "
-              "in turn) sampling resident memory; rc 1 when it grows over 5 % after warm-up");
-  args.option("soak-png", "", "figure of the soak's memory curve (PNG)");
+  addBenchOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const std::vector<int> scales = parseScales(args.str("scale"));
-  const int passes = static_cast<int>(args.integer("passes", 1, 100000));
+  const int passes = args.has("passes")   ? static_cast<int>(args.integer("passes", 1, 100000))
+                     : args.has("render") ? 1
+                                          : 20;
   const long frames = args.integer("frames", 1, 100000);
   const double step = args.number("step", -1, 1), tolerance = args.number("tolerance", 0, 1);
   const long soak_frames = args.integer("soak", 0, 1000000000000L);
   if (args.has("sequence") && scales != std::vector<int>{1})
     throw cli::UsageError("--scale needs simulated frames (no --sequence)");
   const auto cpu_asked = static_cast<int>(args.integer("cpu", -1, CPU_SETSIZE - 1));
+  if (args.has("render")) return benchRender(frames, passes, args.str("out"));
 
   std::vector<BenchInput> inputs;
   for (const int scale : scales)

@@ -2,21 +2,14 @@
 // the centred arrays, and gathering the valid points of a cloud into them.
 #include "plane_kernels.h"
 
+#include "avx2_clones.h"
+
 #include "rdm_simd.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-
-// An AVX2 and a default version, chosen when the program loads by an ifunc resolver. Not under
-// ThreadSanitizer: GCC instruments the resolver too (__tsan_func_entry), which then runs before
-// TSan's runtime is up and crashes the program in the dynamic loader; one default version there.
-#if defined(__SANITIZE_THREAD__)
-#define MULTISLIT_AVX2_CLONES
-#else
-#define MULTISLIT_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
-#endif
 
 namespace multislit::simd {
 

@@ -136,6 +136,24 @@ SensorGeometry::SensorGeometry(const SensorConfig& config) : config_(config) {
     if (i + 1 < p.slit_count)
       boundary_tan_.push_back(std::tan((i + 1 - 0.5 * p.slit_count) * p.slit_spacing * kDeg));
   }
+  double step = 1;
+  if (boundary_tan_.size() >= 2) {
+    double gap = boundary_tan_[1] - boundary_tan_[0];
+    for (std::size_t i = 2; i < boundary_tan_.size(); ++i)
+      gap = std::min(gap, boundary_tan_[i] - boundary_tan_[i - 1]);
+    step = 0.5 * gap;
+  }
+  lookup_per_step_ = 1.0 / step;
+  lookup_low_ = boundary_tan_.empty() ? 0.0 : boundary_tan_.front() - step;
+  const double high = boundary_tan_.empty() ? 0.0 : boundary_tan_.back() + step;
+  const auto cells = static_cast<int>(std::ceil((high - lookup_low_) * lookup_per_step_)) + 1;
+  for (int k = 0; k < cells; ++k) {
+    // The cell's start as the lookup computes it: (x - low) / step = k exactly there.
+    const double start = lookup_low_ + k * step;
+    boundary_lookup_.push_back(
+        static_cast<int>(std::upper_bound(boundary_tan_.begin(), boundary_tan_.end(), start) -
+                         boundary_tan_.begin()));
+  }
 }
 
 double SensorGeometry::slitTan(int slit) const {
@@ -172,20 +190,6 @@ int SensorGeometry::nearestSlit(const Eigen::Vector2d& xy) const {
   const double alpha = std::atan(xy.x() - p.curvature * xy.y() * xy.y());
   const long i = std::lround(alpha / (p.slit_spacing * kDeg) + 0.5 * (p.slit_count - 1));
   return static_cast<int>(std::clamp<long>(i, 0, p.slit_count - 1));
-}
-
-double SensorGeometry::nearestSheetOffset(const Eigen::Vector2d& xy, int* slit) const {
-  // The nearest sheet by its tangent (no atan): the boundaries between sheets are monotonic.
-  const double x = xy.x() - config_.projector.curvature * xy.y() * xy.y();
-  const auto i =
-      std::upper_bound(boundary_tan_.begin(), boundary_tan_.end(), x) - boundary_tan_.begin();
-  *slit = static_cast<int>(i);
-  // atan(x) - alpha_i = atan(d) with d = (x - tan alpha_i) / (1 + x tan alpha_i); |d| is a few
-  // hundredths at most, where d - d^3/3 + d^5/5 is exact to 1e-11.
-  const double t = slit_tan_[static_cast<std::size_t>(i)];
-  const double d = (x - t) / (1.0 + x * t), d2 = d * d;
-  if (d2 > 1e-3) return std::atan(d);
-  return d * (1.0 - d2 * (1.0 / 3.0 - d2 / 5.0));
 }
 
 double SensorGeometry::rowOf(int slit, double t) const {

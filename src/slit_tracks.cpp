@@ -2,6 +2,7 @@
 
 #include "full_scale.h"
 #include "slit_course.h"
+#include "slit_selection.h"
 
 #include <Eigen/Dense>
 #include <opencv2/core.hpp>
@@ -110,71 +111,6 @@ std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int 
   }
   done.insert(done.end(), open.begin(), open.end());
   return done;
-}
-
-std::string describe(const std::vector<Track>& tracks) {
-  std::ostringstream s;
-  for (std::size_t k = 0; k < tracks.size() && k < 20; ++k)
-    s << (k ? ", " : "") << "rows " << tracks[k].firstRow() << "-" << tracks[k].lastRow();
-  if (tracks.size() > 20) s << ", ...";
-  return s.str();
-}
-
-/// Position of a track across the fan's direction `normal`, at its middle point.
-double across(const Track& t, const Eigen::Vector2d& normal) {
-  const Centre& m = t.points[t.points.size() / 2];
-  return normal.dot(Eigen::Vector2d(m.u, m.row));
-}
-
-// 4. The slits: the `expected` longest tracks (each at least min_rows long), ordered across the
-// fan (down and to the right). What is left over is speckle or reflections and is dropped; too
-// few long tracks, or a second-best as long as a slit, or two slits closer than half the
-// pattern's spacing, and the image does not show the pattern.
-std::vector<Track> selectSlits(std::vector<Track> tracks, const ReferenceConfig& config,
-                               const std::string& what, int* dropped) {
-  std::stable_sort(tracks.begin(), tracks.end(), [](const Track& a, const Track& b) {
-    return a.points.size() > b.points.size();
-  });
-  const auto expected = static_cast<std::size_t>(config.expected_slits);
-  auto is_long = [&](const Track& t) {
-    return static_cast<int>(t.points.size()) >= config.min_rows;
-  };
-  const auto long_count =
-      static_cast<std::size_t>(std::count_if(tracks.begin(), tracks.end(), is_long));
-  // A slit runs across most rows of the pattern; a piece that speckle split off one is shorter
-  // than half the median slit.
-  const bool ambiguous = long_count > expected &&
-                         tracks[expected].points.size() >= tracks[expected / 2].points.size() / 2;
-  if (long_count < expected || ambiguous) {
-    tracks.resize(long_count);
-    std::ostringstream msg;
-    msg << what << ": found " << long_count << " slits, expected " << expected;
-    if (!tracks.empty()) msg << " (" << describe(tracks) << ")";
-    if (tracks.empty()) msg << ": is the laser on, and is this an image of a plane?";
-    throw std::runtime_error(msg.str());
-  }
-  *dropped = static_cast<int>(tracks.size() - expected);
-  tracks.resize(expected);
-  Eigen::Vector2d along = Eigen::Vector2d::Zero();
-  for (const Track& t : tracks)
-    along += Eigen::Vector2d(t.points.back().u - t.points.front().u, t.lastRow() - t.firstRow());
-  Eigen::Vector2d normal(along.y(), -along.x());
-  if (normal.x() + normal.y() < 0) normal = -normal;
-  std::sort(tracks.begin(), tracks.end(),
-            [&](const Track& a, const Track& b) { return across(a, normal) < across(b, normal); });
-  std::vector<double> spacing;
-  for (std::size_t k = 1; k < tracks.size(); ++k)
-    spacing.push_back(across(tracks[k], normal) - across(tracks[k - 1], normal));
-  if (!spacing.empty()) {
-    const double median = upperMedian(spacing);
-    for (std::size_t k = 0; k < spacing.size(); ++k)
-      if (spacing[k] < 0.5 * median)
-        throw std::runtime_error(what + ": two slit-like tracks (" + describe({tracks[k]}) +
-                                 " and " + describe({tracks[k + 1]}) + ") are " +
-                                 std::to_string(spacing[k]) + " px apart, under half of the " +
-                                 std::to_string(median) + " px between the projector's slits");
-  }
-  return tracks;
 }
 
 // 5. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve.

@@ -111,11 +111,14 @@ void judgePaper(const Reference& ref, const cv::Mat& image,
 }
 
 // One photometry: its reference, one frame of a scene at a Table I pose, both methods judged.
-Tally runVariant(int index, Kind kind) {
+// `realization` draws other noise (of the reference and the frame) on the same images.
+Tally runVariant(int index, Kind kind, int realization) {
   const Photometry photometry = randomPhotometry(static_cast<std::uint64_t>(1000 + index));
   Scene bare;
   const SensorConfig sensor;
-  const Simulator sim(sensor, applyPhotometry(photometry, bare));
+  RenderConfig render = applyPhotometry(photometry, bare);
+  render.seed += 7919 * static_cast<std::uint64_t>(realization);  // other noise, reference too
+  const Simulator sim(sensor, render);
   const MountConfig reference_mount = tableIPose(0), mount = tableIPose(index % 7);
   const cv::Mat reference_image = sim.renderReference(bare, reference_mount).image;
   Tally tally;
@@ -168,7 +171,8 @@ Tally runVariant(int index, Kind kind) {
 }  // namespace
 
 // 40 random photometries (8 under the sanitizers), each with its own reference, of the floor,
-// the ball, the cable and a screw at the seven poses of Table I.
+// the ball, the cable and a screw at the seven poses of Table I; two noise realizations of each
+// (one under the sanitizers).
 //
 // What holds today is asserted; the targets that do not (recall of >= 5 mm crossings
 // 0.98 and false points 0.1 % over every photometry) are printed and left to the README's table.
@@ -184,11 +188,12 @@ Tally runVariant(int index, Kind kind) {
 // line or grain is shifted over dozens of rows, which no rule on geometry alone tells from an
 // object.
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
-  const int variants = frameCount(40, 8);
+  const int variants = frameCount(40, 8), realizations = frameCount(2, 1);
   Tally all, quiet;  // quiet: the frames whose sigma is the paper's 0.3 px or near it
-  for (int i = 0; i < variants; ++i) {
+  for (int n = 0; n < variants * realizations; ++n) {
+    const int i = n % variants, realization = n / variants;
     const Kind kind = static_cast<Kind>(i % 4);
-    const Tally t = runVariant(i, kind);
+    const Tally t = runVariant(i, kind, realization);
     EXPECT_EQ(t.reference_error, "") << "variant " << i;  // the reference is built on every one
     if (!t.reference_error.empty()) continue;
     std::printf(
@@ -218,13 +223,17 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   EXPECT_GE(all.measured * 100, all.clear * 99);
   EXPECT_GE(all.valid * 100, all.paper_valid * 98);
   EXPECT_LE(all.false_points * 3, all.paper_false);  // a third of the paper's false points or less
-  // 0.962 over the 15 quiet variants of 40; under the sanitizers one of 8 (variant 5: 58 of 63).
-  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 90 : 95));
-  // 0.851 over all 40 (0.749 without the windows along the slits); 0.818 over the first 8.
-  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 80 : 84));
-  // 4.45 % of valid over all 40 (4.28 % before the windows and the one-sided runs).
+  // The bounds hold for any noise: measured over 5 pairs of realizations (Release) or 8 single
+  // ones (the first 8 variants, as the sanitizers run them) at mean - 3 standard deviations. One
+  // reference image per variant and realization weighs on every frame, so one draw was no guide:
+  // 0.851 over all 40 and 0.962 over the quiet ones were single draws of the renderer before (its
+  // five frame draws with that one reference: 0.836 - 0.854); twelve draws of today's give
+  // 0.807 - 0.853. Pairs: recall 0.820 +- 0.007 over all, 0.948 +- 0.005 over the quiet ones,
+  // false points 4.43 +- 0.17 % of valid; the first 8: recall 0.804 +- 0.02, quiet 0.905 - 0.968.
+  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 88 : 93));
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 74 : 79));
   if (!kSanitized) {
-    EXPECT_LE(all.false_points * 1000, all.valid * 46);
+    EXPECT_LE(all.false_points * 1000, all.valid * 50);
   }
   EXPECT_LE(quiet.false_points * 100, quiet.valid * 3);
 }

@@ -3,6 +3,8 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,6 +80,8 @@ class SensorGeometry {
 
   /// Projector centre in the camera frame.
   const Eigen::Vector3d& projectorCentre() const { return projector_centre_; }
+  /// The projector's axes in the camera frame (a rotation about z by the pattern rotation).
+  const Eigen::Matrix3d& cameraFromProjector() const { return camera_from_projector_; }
   /// Camera-frame point to normalized projector coordinates (x', y') = (x/z, y/z).
   Eigen::Vector2d toProjector(const Eigen::Vector3d& p_camera) const;
   /// Direction (camera frame, projector z = 1) of the ray of slit i at slit parameter t.
@@ -87,7 +91,28 @@ class SensorGeometry {
   /// Slit whose sheet is nearest to the projector coordinates.
   int nearestSlit(const Eigen::Vector2d& xy_projector) const;
   /// sheetOffset() of the nearest slit, which is stored in *slit (one atan instead of two).
-  double nearestSheetOffset(const Eigen::Vector2d& xy_projector, int* slit) const;
+  double nearestSheetOffset(const Eigen::Vector2d& xy_projector, int* slit) const {
+    // The nearest sheet by its tangent (no atan): the boundaries between sheets are monotonic.
+    const double x =
+        xy_projector.x() - config_.projector.curvature * xy_projector.y() * xy_projector.y();
+    const double cell = (x - lookup_low_) * lookup_per_step_;
+    std::size_t i = 0;
+    if (cell >= static_cast<double>(boundary_lookup_.size())) {
+      i = boundary_tan_.size();
+    } else if (cell >= 0) {
+      i = static_cast<std::size_t>(
+          boundary_lookup_[static_cast<std::size_t>(static_cast<int>(cell))]);
+      if (i < boundary_tan_.size() && x >= boundary_tan_[i]) ++i;
+      if (i > 0 && x < boundary_tan_[i - 1]) --i;  // rounding at a cell's edge
+    }
+    *slit = static_cast<int>(i);
+    // atan(x) - alpha_i = atan(d) with d = (x - tan alpha_i) / (1 + x tan alpha_i); between two
+    // sheets |d| is a few hundredths, where the series to d^9 is exact to 1e-15.
+    const double t = slit_tan_[i];
+    const double d = (x - t) / (1.0 + x * t), d2 = d * d;
+    if (d2 > 2.5e-3) return std::atan(d);
+    return d * (1.0 - d2 * (1.0 / 3.0 - d2 * (1.0 / 5.0 - d2 * (1.0 / 7.0 - d2 * (1.0 / 9.0)))));
+  }
   /// Image row of every point lit by slit i at parameter t (independent of depth: the
   /// epipolar lines are rows).
   double rowOf(int slit, double t) const;
@@ -106,6 +131,10 @@ class SensorGeometry {
   Eigen::Matrix3d camera_from_projector_;  // rotation about z by the pattern rotation
   std::vector<double> slit_tan_;           // tan(alpha_i)
   std::vector<double> boundary_tan_;       // tan of the angles midway between adjacent slits
+  // The count of boundaries below each cell of width lookup_step_ from lookup_low_: a cell holds
+  // at most one boundary, so one comparison finds the nearest sheet.
+  std::vector<int> boundary_lookup_;
+  double lookup_low_ = 0, lookup_per_step_ = 1;
   Eigen::Vector3d projector_centre_;
 };
 

@@ -1,6 +1,8 @@
 // The noise of the rendered image: laser speckle and the camera's shot and read noise.
 #include "sim/image_noise.h"
 
+#include "avx2_clones.h"
+#include "sim/normal_rows.h"
 #include "sim/parallel_rows.h"
 
 #include <boost/math/special_functions/gamma.hpp>
@@ -13,44 +15,25 @@
 namespace multislit {
 namespace {
 
-// Counter-based random numbers: each image row has its own stream, so the bytes do not depend
-// on how rows are shared between threads.
-class RowRandom {
- public:
-  RowRandom(uint64_t seed, uint64_t frame, uint64_t row, uint64_t stream)
-      : state_(mix(mix(mix(seed) ^ frame) ^ (row << 8 | stream))) {}
-
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-  double normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double u1 = 1.0 - uniform(), u2 = uniform();  // u1 in (0, 1]
-    const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2.0 * M_PI * u2);
-    has_spare_ = true;
-    return r * std::cos(2.0 * M_PI * u2);
-  }
-
- private:
-  static uint64_t mix(uint64_t z) {
-    z += 0x9E3779B97F4A7C15ULL;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  uint64_t next() { return mix(state_ += 0x9E3779B97F4A7C15ULL); }
-
-  uint64_t state_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
-
 enum Stream : uint64_t { kSpeckle = 1, kSensorNoise = 2 };
 
 // The gamma speckle's quantile table: standard normal values z in [-reach, reach], `step` per unit.
 constexpr double kQuantileReach = 8.0, kQuantileStep = 128.0;
+
+// value[c] = the irradiance e[c] [FS] with shot and read noise (z[c] standard normal; none when
+// z is null), clipped to [0, 1]: no branches, the compiler vectorizes it.
+MULTISLIT_AVX2_CLONES void addSensorNoise(const float* __restrict e, const float* __restrict z,
+                                          float* __restrict value, int n, float per_electron,
+                                          float read_variance) {
+  if (!z) {
+    for (int c = 0; c < n; ++c) value[c] = std::min(std::max(e[c], 0.0f), 1.0f);
+    return;
+  }
+  for (int c = 0; c < n; ++c) {
+    const float v = e[c] + std::sqrt(std::max(e[c], 0.0f) * per_electron + read_variance) * z[c];
+    value[c] = std::min(std::max(v, 0.0f), 1.0f);
+  }
+}
 
 }  // namespace
 
@@ -71,39 +54,47 @@ std::vector<float> gammaQuantiles(double contrast) {
 
 // Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel): a
 // white Gaussian field blurred by the grain, then either 1 + contrast x field clamped at 0
-// (Gaussian) or the field's normal quantile mapped to the gamma distribution's (Gamma).
-void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
+// (Gaussian) or the field's normal quantile mapped to the gamma distribution's (Gamma), where
+// `lit` (CV_8U) is set: `laser` must be 0 elsewhere.
+void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render, uint64_t frame,
                   const std::vector<float>& gamma_quantiles) {
+  const double g = render.speckle_grain;
+  const int ksize = cv::saturate_cast<int>(g * 8 + 1) | 1;  // OpenCV's kernel for CV_32F
   cv::Mat speckle(laser.rows, laser.cols, CV_32F);
   parallelRows(laser.rows, [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSpeckle);
-      float* s = speckle.ptr<float>(r);
-      for (int c = 0; c < laser.cols; ++c) s[c] = static_cast<float>(rng.normal());
-    }
+    for (int r = rows.start; r < rows.end; ++r)
+      normalRow(rowStream(render.seed, frame, static_cast<uint64_t>(r), kSpeckle),
+                speckle.ptr<float>(r), laser.cols);
   });
-  const double g = render.speckle_grain;
-  cv::GaussianBlur(speckle, speckle, cv::Size(), g, g, cv::BORDER_REFLECT);
-  if (render.speckle_model == SpeckleModel::Gaussian) {
-    speckle = 1.0 + render.speckle_contrast * 2.0 * std::sqrt(M_PI) * g * speckle;
-    cv::max(speckle, 0.0, speckle);
-  } else {
-    // The blurred field's std is the sum of the squared 1-D kernel weights (OpenCV's kernel).
-    const cv::Mat k = cv::getGaussianKernel(cv::saturate_cast<int>(g * 8 + 1) | 1, g, CV_64F);
-    const double scale = 1.0 / k.dot(k), last = static_cast<double>(gamma_quantiles.size() - 1);
-    parallelRows(laser.rows, [&](const cv::Range& rows) {
-      for (int r = rows.start; r < rows.end; ++r) {
-        float* s = speckle.ptr<float>(r);
-        for (int c = 0; c < laser.cols; ++c) {
+  cv::GaussianBlur(speckle, speckle, cv::Size(ksize, ksize), g, g, cv::BORDER_REFLECT);
+  // Gaussian: 1 + contrast x the field of unit std; Gamma: the field's normal quantile mapped to
+  // the gamma distribution's. The blurred field's std is the sum of the squared 1-D kernel
+  // weights (OpenCV's kernel); a continuous kernel gives 1 / (2 sqrt(pi) g).
+  const bool gaussian = render.speckle_model == SpeckleModel::Gaussian;
+  const cv::Mat k = cv::getGaussianKernel(ksize, g, CV_64F);
+  const double scale =
+                   gaussian ? render.speckle_contrast * 2.0 * std::sqrt(M_PI) * g : 1.0 / k.dot(k),
+               last = static_cast<double>(gamma_quantiles.size()) - 1;
+  parallelRows(laser.rows, [&](const cv::Range& rows) {
+    for (int r = rows.start; r < rows.end; ++r) {
+      const uchar* l = lit.ptr<uchar>(r);
+      const float* s = speckle.ptr<float>(r);
+      float* out = laser.ptr<float>(r);
+      for (int c = 0; c < laser.cols; ++c) {
+        if (!l[c]) continue;
+        double factor;
+        if (gaussian) {
+          factor = std::max(0.0, 1.0 + scale * s[c]);
+        } else {
           const double x = std::clamp((s[c] * scale + kQuantileReach) * kQuantileStep, 0.0, last);
           const auto i = std::min(static_cast<std::size_t>(x), gamma_quantiles.size() - 2);
           const double f = x - static_cast<double>(i);
-          s[c] = static_cast<float>((1 - f) * gamma_quantiles[i] + f * gamma_quantiles[i + 1]);
+          factor = (1 - f) * gamma_quantiles[i] + f * gamma_quantiles[i + 1];
         }
+        out[c] = static_cast<float>(out[c] * factor);
       }
-    });
-  }
-  laser = laser.mul(speckle);
+    }
+  });
 }
 
 // The camera's image of `irradiance` [FS]: lens blur, then shot and read noise, saturation and
@@ -112,22 +103,22 @@ cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t fr
   if (render.blur_sigma > 0)
     cv::GaussianBlur(irradiance, irradiance, cv::Size(), render.blur_sigma, render.blur_sigma,
                      cv::BORDER_REFLECT);
-  const double full = render.bit_depth == 8 ? 255.0 : 65535.0;
+  const float full = render.bit_depth == 8 ? 255.0f : 65535.0f;
   cv::Mat image(irradiance.rows, irradiance.cols, render.bit_depth == 8 ? CV_8U : CV_16U);
+  const auto per_electron = static_cast<float>(1.0 / render.full_well),
+             read_variance = static_cast<float>(render.read_noise * render.read_noise);
   parallelRows(irradiance.rows, [&](const cv::Range& rows) {
+    std::vector<float> value(static_cast<std::size_t>(irradiance.cols)), z(value.size());
     for (int r = rows.start; r < rows.end; ++r) {
-      RowRandom rng(render.seed, frame, static_cast<uint64_t>(r), kSensorNoise);
-      const float* e = irradiance.ptr<float>(r);
+      if (render.noise)
+        normalRow(rowStream(render.seed, frame, static_cast<uint64_t>(r), kSensorNoise), z.data(),
+                  irradiance.cols);
+      addSensorNoise(irradiance.ptr<float>(r), render.noise ? z.data() : nullptr, value.data(),
+                     irradiance.cols, per_electron, read_variance);
+      if (render.gamma != 1.0)
+        for (float& v : value) v = static_cast<float>(std::pow(v, 1.0 / render.gamma));
       for (int c = 0; c < irradiance.cols; ++c) {
-        double value = e[c];
-        if (render.noise) {
-          const double noise = std::sqrt(std::max(value, 0.0) / render.full_well +
-                                         render.read_noise * render.read_noise);
-          value += noise * rng.normal();
-        }
-        value = std::clamp(value, 0.0, 1.0);
-        if (render.gamma != 1.0) value = std::pow(value, 1.0 / render.gamma);
-        const double dn = std::round(value * full);
+        const auto dn = static_cast<unsigned>(value[static_cast<std::size_t>(c)] * full + 0.5f);
         if (render.bit_depth == 8)
           image.ptr<uint8_t>(r)[c] = static_cast<uint8_t>(dn);
         else

@@ -1,6 +1,6 @@
 // The noise of the rendered image (private to the simulator): laser speckle, then the camera's
-// lens blur, shot and read noise and quantization. Each image row draws its own random stream,
-// so the bytes do not depend on how rows are shared between threads.
+// lens blur, shot and read noise and quantization. Each pixel draws its own random numbers, so
+// the bytes do not depend on how rows are shared between threads.
 #pragma once
 
 #include "multislit/sim/simulator.h"
@@ -17,8 +17,9 @@ namespace multislit {
 std::vector<float> gammaQuantiles(double contrast);
 
 /// Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel) of frame
-/// `frame`; `gamma_quantiles` from gammaQuantiles() for SpeckleModel::Gamma.
-void applySpeckle(cv::Mat& laser, const RenderConfig& render, uint64_t frame,
+/// `frame`, where `lit` (CV_8U) is set; `laser` must be 0 elsewhere. `gamma_quantiles` from
+/// gammaQuantiles() for SpeckleModel::Gamma.
+void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render, uint64_t frame,
                   const std::vector<float>& gamma_quantiles);
 
 /// The camera's image of `irradiance` (CV_32F) [FS]: lens blur, then shot and read noise,

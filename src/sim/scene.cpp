@@ -1,4 +1,5 @@
 #include "multislit/sim/scene.h"
+#include "multislit/sim/floor_albedo.h"
 #include "multislit/units.h"
 
 #include <Eigen/Geometry>
@@ -11,60 +12,6 @@ namespace multislit {
 namespace {
 
 constexpr double kEps = 1e-9;
-// Value noise on an integer lattice, smoothly interpolated; in [-1, 1].
-double hash01(int64_t x, int64_t y, uint64_t seed) {
-  uint64_t h = seed * 0x9E3779B97F4A7C15ULL ^ static_cast<uint64_t>(x) * 0xBF58476D1CE4E5B9ULL ^
-               static_cast<uint64_t>(y) * 0x94D049BB133111EBULL;
-  h ^= h >> 31;
-  h *= 0xD6E8FEB86659FD93ULL;
-  h ^= h >> 32;
-  return static_cast<double>(h >> 11) * 0x1.0p-53;
-}
-
-// The lattice cell of a floored coordinate, wrapped modulo 2^62: any finite coordinate (a floor
-// point near the horizon, a texture of 1e-20 m: fuzz/fuzz_scene) converts to an integer without
-// overflow, which is undefined; the pattern repeats after 2^62 cells. Not finite: cell 0.
-int64_t latticeCell(double floored) {
-  return std::isfinite(floored) ? static_cast<int64_t>(std::fmod(floored, 0x1p62)) : 0;
-}
-
-double valueNoise(double x, double y, uint64_t seed) {
-  const double fx = std::floor(x), fy = std::floor(y);
-  const int64_t ix = latticeCell(fx), iy = latticeCell(fy);
-  const double tx = x - fx, ty = y - fy;
-  const double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
-  const double a = hash01(ix, iy, seed), b = hash01(ix + 1, iy, seed);
-  const double c = hash01(ix, iy + 1, seed), d = hash01(ix + 1, iy + 1, seed);
-  return 2.0 * ((a + (b - a) * sx) + ((c + (d - c) * sx) - (a + (b - a) * sx)) * sy) - 1.0;
-}
-
-// Wood-like grain: long features along world x (the walking direction), finer ones across.
-double woodGrain(double x, double y, double scale, uint64_t seed) {
-  return 0.55 * valueNoise(x / (6 * scale), y / scale, seed) +
-         0.30 * valueNoise(x / (2 * scale), y / (0.5 * scale), seed + 1) +
-         0.15 * valueNoise(x / scale, y / (0.35 * scale), seed + 2);
-}
-
-// Square tiles of edge `scale` (the grid shifted by the seed), each with its own shade and a
-// faint mottle, separated by grout lines of `grout_width` centred on the tile edges.
-double tileAlbedo(const FloorConfig& f, double x, double y) {
-  const double s = f.texture_scale;
-  const double gx = x / s + hash01(-1, 0, f.texture_seed),
-               gy = y / s + hash01(0, -1, f.texture_seed);
-  const double fx = std::floor(gx), fy = std::floor(gy);
-  const double edge = s * std::min({gx - fx, 1 - (gx - fx), gy - fy, 1 - (gy - fy)});
-  if (edge < 0.5 * f.grout_width) return f.grout_albedo;
-  const double shade = 2 * hash01(latticeCell(fx), latticeCell(fy), f.texture_seed) - 1;
-  const double mottle = valueNoise(x / 0.01, y / 0.01, f.texture_seed + 3);
-  return f.albedo * (1.0 + f.texture_amplitude * shade + 0.03 * mottle);
-}
-
-// Carpet: fibre tufts of size `scale` and a finer octave, high contrast.
-double carpetFibres(double x, double y, double scale, uint64_t seed) {
-  return 0.65 * valueNoise(x / scale, y / scale, seed) +
-         0.35 * valueNoise(x / (0.45 * scale), y / (0.45 * scale), seed + 1);
-}
-
 // A ceiling lamp that a glossy floor mirrors into the camera [m, world frame], and the width of
 // its mirror image (Phong exponent of the gloss lobe).
 const Eigen::Vector3d kLamp(0.9, 0.25, 2.4);
@@ -276,15 +223,7 @@ Hit Scene::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direc
 }
 
 double Scene::albedo(int object, const Eigen::Vector3d& point) const {
-  if (object == 0) {
-    if (floor.texture == FloorTexture::Tiles)
-      return std::clamp(tileAlbedo(floor, point.x(), point.y()), 0.0, 1.0);
-    const double g =
-        floor.texture == FloorTexture::Wood
-            ? woodGrain(point.x(), point.y(), floor.texture_scale, floor.texture_seed)
-            : carpetFibres(point.x(), point.y(), floor.texture_scale, floor.texture_seed);
-    return std::clamp(floor.albedo * (1.0 + floor.texture_amplitude * g), 0.0, 1.0);
-  }
+  if (object == 0) return FloorAlbedo(floor).at(point.x(), point.y());
   if (object > 0 && object <= static_cast<int>(objects.size())) return objects[object - 1].albedo;
   return 0.0;
 }

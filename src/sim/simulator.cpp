@@ -2,10 +2,13 @@
 
 #include "sim/image_noise.h"
 #include "sim/parallel_rows.h"
+#include "sim/pixel_centres.h"
+#include "sim/shader.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -14,95 +17,6 @@
 namespace multislit {
 namespace {
 
-// Mean of exp(-x^2 / 2 sigma^2) over a pixel on which x = d0 + a p + b q, p and q uniform in
-// [-1/2, 1/2]: a Gaussian sheet profile integrated exactly over a pixel where the sheet offset
-// is linear. With F(z) = z erf(z) + exp(-z^2) / sqrt(pi), the antiderivative of erf.
-double pixelMeanOfGaussian(double d0, double a, double b, double sigma) {
-  a = std::abs(a);
-  b = std::abs(b);
-  if (a < b) std::swap(a, b);
-  const double k = 1.0 / (sigma * std::sqrt(2.0));
-  if (a < 0.02 * sigma) return std::exp(-0.5 * d0 * d0 / (sigma * sigma));
-  const double scale = sigma * std::sqrt(M_PI / 2.0) / a;
-  if (b < 0.02 * sigma) return scale * (std::erf(k * (d0 + a / 2)) - std::erf(k * (d0 - a / 2)));
-  auto F = [](double z) { return z * std::erf(z) + std::exp(-z * z) / std::sqrt(M_PI); };
-  return scale / (b * k) *
-         (F(k * (d0 + a / 2 + b / 2)) - F(k * (d0 - a / 2 + b / 2)) - F(k * (d0 + a / 2 - b / 2)) +
-          F(k * (d0 - a / 2 - b / 2)));
-}
-
-// Everything needed to shade one ray, in world coordinates.
-struct Shader {
-  const Scene& scene;
-  const SensorGeometry& geometry;
-  const RenderConfig& render;
-  Eigen::Isometry3d world_from_camera;
-  Eigen::Vector3d camera_centre, projector_centre;
-  double sigma;  // the sheet's width as rendered, before the surface's factor [rad]
-
-  // What one ray sees: the surface, its albedo and ambient light and, near a sheet, the laser's
-  // radiance before the sheet profile (0 when shadowed, facing away or beyond the slit's end).
-  struct Sample {
-    int object = -1;
-    int slit = 0;
-    double offset = std::numeric_limits<double>::infinity();  // from the nearest sheet [rad]
-    double t = 0;         // position along the slit (projector y / z)
-    double albedo = 0;    // at 660 nm
-    double radiance = 0;  // laser at the sheet's centre [FS]
-    float glare = 0;      // ambient mirrored by a glossy floor, relative to albedo 1
-    float width = 1;      // factor on the sheet's width on this surface
-  };
-
-  // `known_object` and `known_albedo` pass the pixel centre's albedo to its sub-samples: the
-  // floor's grain is many pixels wide.
-  Sample trace(double u, double v, double reach, int known_object = -2,
-               double known_albedo = 0) const {
-    Sample s;
-    const Eigen::Vector3d ray_c = geometry.pixelRay(u, v).normalized();
-    const Eigen::Vector3d ray_w = world_from_camera.linear() * ray_c;
-    const Hit hit = scene.intersect(camera_centre, ray_w);
-    s.object = hit.object;
-    if (!hit.valid()) return s;
-    const Eigen::Vector2d xy = geometry.toProjector(hit.distance * ray_c);
-    s.offset = geometry.nearestSheetOffset(xy, &s.slit);
-    s.t = xy.y();
-    const Eigen::Vector3d point_w = camera_centre + hit.distance * ray_w;
-    s.albedo = hit.object == known_object ? known_albedo : scene.albedo(hit.object, point_w);
-    if (hit.object == 0 && scene.floor.gloss > 0)
-      s.glare = static_cast<float>(scene.floorGlare(point_w, ray_w));
-    if (std::abs(s.offset) > reach || std::abs(s.t) > geometry.slitTMax()) return s;
-    const Eigen::Vector3d to_point = point_w - projector_centre;
-    const double range = to_point.norm();
-    const Eigen::Vector3d dir = to_point / range;
-    const double incidence = -hit.normal.dot(dir);
-    if (incidence <= 0) return s;
-    if (scene.intersect(projector_centre, dir, range * (1.0 - 1e-9)).valid()) return s;  // shadow
-    // The sheet's power is kept when the surface widens it: its peak drops by the same factor.
-    const double width = scene.stripeWidth(hit.object);
-    s.width = static_cast<float>(width);
-    s.radiance = render.laser_peak * s.albedo * incidence * (0.5 / range) * (0.5 / range) *
-                 (scene.laserAlbedo(hit.object) / (render.stripe_width * width));
-    return s;
-  }
-
-  double laser(const Sample& s) const {
-    const double sheet = sigma * s.width;
-    return s.radiance * std::exp(-0.5 * s.offset * s.offset / (sheet * sheet));
-  }
-};
-
-// The samples of the pixel centres, row-major, with the light that does not depend on the sheets.
-struct CentreSamples {
-  int width = 0, height = 0;
-  std::vector<Shader::Sample> samples;
-  cv::Mat ambient;  // ambient light and glare per pixel, CV_32F [FS]
-  cv::Mat near;     // CV_8U: 1 where a sheet may light the pixel
-
-  const Shader::Sample& at(int r, int c) const {
-    return samples[static_cast<std::size_t>(r) * width + c];
-  }
-};
-
 // How far from a sheet's centre [rad] light is traced: beyond 4.5 sigma a sheet adds < 4e-5 of
 // its peak, for the widest sheet on any surface.
 double sheetReach(const Scene& scene, double sigma, double pixel) {
@@ -110,30 +24,6 @@ double sheetReach(const Scene& scene, double sigma, double pixel) {
   for (std::size_t k = 0; k < scene.objects.size(); ++k)
     widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
   return 4.5 * sigma * widest + 2 * pixel;
-}
-
-// Every pixel centre: its surface, ambient light and where the laser sheets are.
-CentreSamples traceCentres(const Shader& shader, double reach, double pixel) {
-  const SensorGeometry& geometry = shader.geometry;
-  const int width = geometry.config().camera.width, height = geometry.config().camera.height;
-  CentreSamples centre{width, height,
-                       std::vector<Shader::Sample>(static_cast<std::size_t>(width) * height),
-                       cv::Mat(height, width, CV_32F), cv::Mat(height, width, CV_8U)};
-  parallelRows(height, [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      for (int c = 0; c < width; ++c) {
-        const Shader::Sample& s = centre.samples[static_cast<std::size_t>(r) * width + c] =
-            shader.trace(c, r, reach);
-        centre.ambient.ptr<float>(r)[c] =
-            static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
-        centre.near.ptr<uchar>(r)[c] =
-            std::abs(s.offset) < reach && std::abs(s.t) < geometry.slitTMax() + 2 * pixel;
-      }
-    }
-  });
-  // Catch pixels split by an edge.
-  cv::dilate(centre.near, centre.near, cv::Mat::ones(3, 3, CV_8U));
-  return centre;
 }
 
 // Whether the sheet's offset is linear over pixel (r, c): the same surface and slit, lit, not at
@@ -210,7 +100,7 @@ void RenderConfig::validate() const {
 }
 
 Simulator::Simulator(const SensorConfig& sensor, const RenderConfig& render)
-    : geometry_(sensor), render_(render) {
+    : geometry_(sensor), render_(render), pool_(std::make_shared<CentrePool>()) {
   render_.validate();
   if (render_.speckle_model == SpeckleModel::Gamma && render_.speckle_contrast > 0)
     gamma_quantiles_ = gammaQuantiles(render_.speckle_contrast);
@@ -222,29 +112,46 @@ RenderedFrame Simulator::renderReference(const Scene& floor,
 }
 
 RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
-                                uint64_t frame) const {
+                                uint64_t frame, RenderTimes* times) const {
+  RenderTimes spent;
+  auto lap = [clock = std::chrono::steady_clock::now()](double& into) mutable {
+    const auto now = std::chrono::steady_clock::now();
+    into = std::chrono::duration<double>(now - clock).count();
+    clock = now;
+  };
   const double sigma = geometry_.config().projector.sheet_sigma * render_.stripe_width,
                pixel = 1.0 / geometry_.config().camera.f();
-  const Shader shader{scene,
-                      geometry_,
-                      render_,
-                      world_from_camera,
-                      world_from_camera.translation(),
-                      world_from_camera * geometry_.projectorCentre(),
-                      sigma};
+  Shader shader{scene,
+                geometry_,
+                render_,
+                world_from_camera,
+                world_from_camera.translation(),
+                world_from_camera * geometry_.projectorCentre(),
+                sigma};
   const double reach = sheetReach(scene, sigma, pixel);
+  const std::vector<ShadowBox> casters = shadowBoxes(shader);
+  if (render_.method == RenderMethod::Culled) shader.casters = &casters;
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
-  const CentreSamples centre = traceCentres(shader, reach, pixel);
+  std::unique_ptr<CentreSamples> buffers = pool_->take();
+  const CentreSamples& centre = *buffers;
+  traceCentres(shader, reach, pixel, render_.method, *buffers);
+  lap(spent.centres);
   // 2. Laser light integrated over each pixel near a sheet.
   cv::Mat laser = integrateLaser(shader, centre, reach, pixel);
+  lap(spent.laser);
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
   if (render_.noise && render_.speckle_contrast > 0)
-    applySpeckle(laser, render_, frame, gamma_quantiles_);
+    applySpeckle(laser, centre.near, render_, frame, gamma_quantiles_);
   // 4. Lens blur, then shot and read noise, saturation and quantization.
   RenderedFrame out;
-  out.image = exposeSensor(centre.ambient + laser, render_, frame);
+  cv::add(laser, centre.ambient, laser);
+  out.image = exposeSensor(laser, render_, frame);
+  pool_->give(std::move(buffers));
+  lap(spent.noise);
   out.truth = groundTruth(scene, world_from_camera);
+  lap(spent.truth);
+  if (times) *times = spent;
   return out;
 }
 

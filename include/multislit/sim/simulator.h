@@ -8,10 +8,13 @@
 #include <opencv2/core/mat.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace multislit {
+
+class CentrePool;  // the simulator's buffers (private)
 
 /// How the laser speckle's intensity is distributed (per pixel, mean 1, std speckle_contrast).
 enum class SpeckleModel {
@@ -19,6 +22,13 @@ enum class SpeckleModel {
   Gamma,     ///< gamma of shape k = 1 / contrast^2 (any real k >= 1); contrast 1: exponential
              ///< intensity, fully developed speckle. A correlated Gaussian field mapped through
              ///< the gamma quantile (Gaussian copula): exact marginal, any k, one field's cost.
+};
+
+/// How the pixel centres are traced: the same samples either way, to rounding.
+enum class RenderMethod {
+  Culled,      ///< each object only on the pixels its bounding spheres cover, the floor elsewhere
+               ///< in closed form
+  Exhaustive,  ///< every pixel's ray against every object (the renderer before: a yardstick)
 };
 
 /// Radiometry and noise of the camera. Intensities are fractions of the sensor's full scale.
@@ -38,7 +48,8 @@ struct RenderConfig {
   double stripe_width = 1.0;
   double gamma = 1.0;  ///< output = value^(1 / gamma) before quantization; 1: linear [-]
   bool noise = true;   ///< false: no speckle, shot or read noise (a noise-free image)
-  uint64_t seed = 1;   ///< the same seed and frame index give the same bytes
+  RenderMethod method = RenderMethod::Culled;  ///< how the pixel centres are traced
+  uint64_t seed = 1;  ///< the same seed and frame index give the same bytes
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -54,6 +65,15 @@ struct SlitCrossing {
   double height = 0.0;                                     ///< above the floor [m]
 };
 
+/// Where one render's time went, wall clock [s].
+struct RenderTimes {
+  double centres = 0;  ///< every pixel centre's surface, ambient light and nearest sheet
+  double laser = 0;    ///< laser light integrated over the pixels near a sheet
+  double noise = 0;    ///< speckle, lens blur, shot and read noise, quantization
+  double truth = 0;    ///< the ground truth of every slit crossing
+  double total() const { return centres + laser + noise + truth; }
+};
+
 struct RenderedFrame {
   cv::Mat image;                    ///< CV_8UC1 or CV_16UC1, camera size
   std::vector<SlitCrossing> truth;  ///< every visible crossing, by slit then row
@@ -67,8 +87,9 @@ class Simulator {
   const RenderConfig& renderConfig() const { return render_; }
 
   /// Renders what the camera at `world_from_camera` sees of `scene`. `frame` selects the noise.
+  /// `times`, when given, receives where the time went.
   RenderedFrame render(const Scene& scene, const Eigen::Isometry3d& world_from_camera,
-                       uint64_t frame = 0) const;
+                       uint64_t frame = 0, RenderTimes* times = nullptr) const;
   /// The frame number of reference images: their noise is drawn apart from every sequence's.
   static constexpr uint64_t kReferenceFrame = 1u << 30;
   /// The reference image (Sec. II-C): `floor`, a scene of the plane alone, seen by the camera at
@@ -83,6 +104,7 @@ class Simulator {
   SensorGeometry geometry_;
   RenderConfig render_;
   std::vector<float> gamma_quantiles_;  // SpeckleModel::Gamma: intensity per Gaussian quantile
+  std::shared_ptr<CentrePool> pool_;    // buffers reused from render to render
 };
 
 /// Ground truth as CSV: slit,row,u,x,y,z (camera) ,wx,wy,wz (world),object,height.

@@ -1,0 +1,305 @@
+#include "sim/pixel_centres.h"
+
+#include "sim/parallel_rows.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace multislit {
+namespace {
+
+// A margin on every bound, for rounding in the tests below [m].
+constexpr double kBoundMargin = 1e-7;
+constexpr int kMaxChain = 512;  // spheres per cylinder
+
+// Rows [first, last] whose plane of rays (through the camera centre and the row's pixel centres)
+// may meet `sphere`, widened by a row; first > last when none.
+ColumnSpan sphereRows(const SensorGeometry& geometry, const BoundingSphere& sphere) {
+  const int height = geometry.config().camera.height;
+  const Eigen::Vector3d& c = sphere.centre;
+  const double r2 = sphere.radius * sphere.radius;
+  // Row plane y' = y z with normal (0, 1, -y): (cy - y cz)^2 <= r^2 (1 + y^2).
+  const double a = c.z() * c.z() - r2;
+  if (a <= 0 || c.squaredNorm() <= r2) return {0, height - 1};  // the camera sees it all around
+  const double disc = r2 * (c.y() * c.y() + a);
+  if (disc < 0) return {};
+  const double f = geometry.config().camera.f(), cy = geometry.config().camera.cy();
+  const double y0 = (c.y() * c.z() - std::sqrt(disc)) / a,
+               y1 = (c.y() * c.z() + std::sqrt(disc)) / a;
+  const double lo = std::floor(cy + f * y0) - 1, hi = std::ceil(cy + f * y1) + 1;
+  if (hi < 0 || lo > height - 1) return {};
+  return {static_cast<int>(std::max(lo, 0.0)), static_cast<int>(std::min<double>(hi, height - 1))};
+}
+
+// Sorted, merged spans of the columns where some object may be, per row.
+std::vector<std::vector<ColumnSpan>> objectColumns(const Shader& shader) {
+  const SensorGeometry& geometry = shader.geometry;
+  std::vector<std::vector<ColumnSpan>> rows(
+      static_cast<std::size_t>(geometry.config().camera.height));
+  for (const std::vector<BoundingSphere>& spheres :
+       objectBounds(shader.scene, shader.world_from_camera.inverse())) {
+    for (const BoundingSphere& b : spheres) {
+      const ColumnSpan span = sphereRows(geometry, b);
+      for (int r = span.first; r <= span.last; ++r) {
+        const ColumnSpan cols = sphereColumns(geometry, b, r);
+        if (cols.first <= cols.last) rows[static_cast<std::size_t>(r)].push_back(cols);
+      }
+    }
+  }
+  for (std::vector<ColumnSpan>& spans : rows) {
+    std::sort(spans.begin(), spans.end(),
+              [](const ColumnSpan& a, const ColumnSpan& b) { return a.first < b.first; });
+    std::vector<ColumnSpan> merged;
+    for (const ColumnSpan& s : spans) {
+      if (!merged.empty() && s.first <= merged.back().last + 1)
+        merged.back().last = std::max(merged.back().last, s.last);
+      else
+        merged.push_back(s);
+    }
+    spans.swap(merged);
+  }
+  return rows;
+}
+
+// The floor along a row's pixel centres: each column's sample as trace() gives it where no object
+// is on the ray, in closed form. project() has no dependencies between columns, so the compiler
+// vectorizes it.
+class FloorRow {
+ public:
+  FloorRow(const Shader& shader, const FloorAlbedo& albedo)
+      : shader_(shader), albedo_(albedo), width_(shader.geometry.config().camera.width) {
+    for (std::vector<double>* v : {&depth_, &x_, &y_, &px_, &py_, &offset_, &albedo_row_})
+      v->resize(static_cast<std::size_t>(width_));
+    slit_.resize(static_cast<std::size_t>(width_));
+  }
+
+  void project(int r) {
+    const CameraConfig& camera = shader_.geometry.config().camera;
+    const double f = camera.f();
+    const Eigen::Vector3d first(-camera.cx() / f, (r - camera.cy()) / f, 1.0);  // column 0's ray
+    const Eigen::Matrix3d& world = shader_.world_from_camera.linear();
+    const Eigen::Matrix3d projector = shader_.geometry.cameraFromProjector().transpose();
+    w0_ = world * first;
+    w1_ = world.col(0) / f;
+    const Eigen::Vector3d g0 = projector * first, g1 = projector.col(0) / f,
+                          m = projector * shader_.geometry.projectorCentre();
+    const Eigen::Vector3d& o = shader_.camera_centre;
+    // Plain numbers and unaliased arrays: a loop the compiler vectorizes.
+    const double wx = w0_.x(), wy = w0_.y(), wz = w0_.z(), dx = w1_.x(), dy = w1_.y(), dz = w1_.z(),
+                 ox = o.x(), oy = o.y(), oz = o.z();
+    const double gx = g0.x(), gy = g0.y(), gz = g0.z(), hx = g1.x(), hy = g1.y(), hz = g1.z(),
+                 mx = m.x(), my = m.y(), mz = m.z();
+    double* __restrict depth = depth_.data();
+    double* __restrict x = x_.data();
+    double* __restrict y = y_.data();
+    double* __restrict px = px_.data();
+    double* __restrict py = py_.data();
+    for (int c = 0; c < width_; ++c) {
+      depth[c] = wz + c * dz;  // the ray's world z, < 0 when it meets the floor
+      const double s = -oz / depth[c];
+      const bool floor = depth[c] < 0;  // else 0: a point the texture's tables hold
+      px[c] = floor ? ox + s * (wx + c * dx) : 0.0;
+      py[c] = floor ? oy + s * (wy + c * dy) : 0.0;
+      const double qz = s * (gz + c * hz) - mz;
+      x[c] = (s * (gx + c * hx) - mx) / qz;
+      y[c] = (s * (gy + c * hy) - my) / qz;
+    }
+    albedo_.row(px, py, albedo_row_.data(), width_);
+    // The nearest sheets: a short body, so consecutive columns overlap in the processor.
+    const SensorGeometry& geometry = shader_.geometry;
+    for (int c = 0; c < width_; ++c)
+      offset_[static_cast<std::size_t>(c)] = geometry.nearestSheetOffset(
+          Eigen::Vector2d(x[c], y[c]), &slit_[static_cast<std::size_t>(c)]);
+  }
+
+  /// Writes column c's sample into `s`.
+  void at(int c, double reach, Shader::Sample& s) const {
+    const auto k = static_cast<std::size_t>(c);
+    s = Shader::Sample{};
+    if (!(depth_[k] < 0) || !(shader_.camera_centre.z() > 0)) return;  // above the horizon
+    s.object = 0;
+    const Eigen::Vector2d xy(x_[k], y_[k]);
+    s.offset = offset_[k];
+    s.slit = static_cast<std::int16_t>(slit_[k]);
+    s.t = static_cast<float>(xy.y());
+    const Eigen::Vector3d point_w(px_[k], py_[k], 0.0);
+    s.albedo = static_cast<float>(albedo_row_[k]);
+    shader_.glare(s, point_w, w0_ + c * w1_);
+    shader_.illuminate(s, xy, Eigen::Vector3d::UnitZ(), point_w, reach);
+  }
+
+ private:
+  const Shader& shader_;
+  const FloorAlbedo& albedo_;
+  int width_;
+  Eigen::Vector3d w0_, w1_;  // the world ray of column c: w0 + c w1
+  std::vector<double> depth_, x_, y_, px_, py_, offset_, albedo_row_;
+  std::vector<int> slit_;
+};
+
+// The floor the camera sees, within 5 m (the rays of every 8th pixel): where its texture is
+// tabulated.
+Eigen::AlignedBox2d floorRegion(const Shader& shader) {
+  const CameraConfig& camera = shader.geometry.config().camera;
+  const Eigen::Vector3d& o = shader.camera_centre;
+  Eigen::AlignedBox2d region;
+  for (int r = 0; r < camera.height + 7; r += 8) {
+    for (int c = 0; c < camera.width + 7; c += 8) {
+      const Eigen::Vector3d ray =
+          shader.world_from_camera.linear() *
+          shader.geometry.pixelRay(std::min(c, camera.width - 1), std::min(r, camera.height - 1));
+      if (!(ray.z() < 0) || !(o.z() > 0)) continue;
+      const Eigen::Vector3d hit = o - o.z() / ray.z() * ray;
+      if ((hit - o).norm() < 5.0) region.extend(hit.head<2>());
+    }
+  }
+  return region;
+}
+
+// Sets the ambient light of pixel (r, c) from its sample and whether a sheet may light it.
+inline void finish(CentreSamples& centre, const Shader& shader, int r, int c, double reach,
+                   double pixel) {
+  const Shader::Sample& s = centre.samples[static_cast<std::size_t>(r) * centre.width + c];
+  centre.ambient.ptr<float>(r)[c] =
+      static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
+  centre.near.ptr<uchar>(r)[c] =
+      std::abs(s.offset) < reach && std::abs(s.t) < shader.geometry.slitTMax() + 2 * pixel;
+}
+
+}  // namespace
+
+std::vector<std::vector<BoundingSphere>> objectBounds(const Scene& scene,
+                                                      const Eigen::Isometry3d& frame_from_world) {
+  std::vector<std::vector<BoundingSphere>> bounds;
+  for (const SceneObject& o : scene.objects) {
+    std::vector<BoundingSphere>& spheres = bounds.emplace_back();
+    auto add = [&](const Eigen::Vector3d& centre_w, double radius) {
+      spheres.push_back({frame_from_world * centre_w, radius * (1 + 1e-9) + kBoundMargin});
+    };
+    switch (o.type) {
+      case ShapeType::Sphere:
+        add(o.centre, o.radius);
+        break;
+      case ShapeType::Box:
+        add(o.centre, 0.5 * o.size.norm());
+        break;
+      case ShapeType::Cylinder: {
+        const Eigen::Vector3d axis = o.axis_end - o.axis_start;
+        const double length = axis.norm();
+        const int n = static_cast<int>(
+            std::clamp(std::ceil(length / (2 * o.radius)), 1.0, static_cast<double>(kMaxChain)));
+        const double half = 0.5 * length / n;
+        for (int i = 0; i < n; ++i)
+          add(o.axis_start + (i + 0.5) / n * axis, std::sqrt(o.radius * o.radius + half * half));
+        break;
+      }
+    }
+  }
+  return bounds;
+}
+
+std::vector<ShadowBox> shadowBoxes(const Shader& shader) {
+  const SensorGeometry& g = shader.geometry;
+  Eigen::Isometry3d projector_from_camera = Eigen::Isometry3d::Identity();
+  projector_from_camera.linear() = g.cameraFromProjector().transpose();
+  projector_from_camera.translation() =
+      -(g.cameraFromProjector().transpose() * g.projectorCentre());
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<ShadowBox> boxes;
+  for (const std::vector<BoundingSphere>& spheres :
+       objectBounds(shader.scene, projector_from_camera * shader.world_from_camera.inverse())) {
+    ShadowBox box{inf, -inf, inf, -inf};
+    for (const BoundingSphere& b : spheres) {
+      const Eigen::Vector3d& q = b.centre;
+      if (q.z() <= b.radius) {  // around or behind the projector: anywhere
+        box = {-inf, inf, -inf, inf};
+        break;
+      }
+      // The tangents of the rays in the x-z (y-z) plane that touch the sphere's shadow there.
+      auto range = [&](double lateral, double& lo, double& hi) {
+        const double rho = std::hypot(lateral, q.z()), theta = std::atan2(lateral, q.z());
+        const double beta = std::asin(b.radius / rho);
+        lo = std::min(lo, std::tan(theta - beta));
+        hi = std::max(hi, std::tan(theta + beta));
+      };
+      range(q.x(), box.x0, box.x1);
+      range(q.y(), box.y0, box.y1);
+    }
+    boxes.push_back(box);
+  }
+  return boxes;
+}
+
+ColumnSpan sphereColumns(const SensorGeometry& geometry, const BoundingSphere& sphere, int row) {
+  const CameraConfig& camera = geometry.config().camera;
+  const int width = camera.width;
+  const Eigen::Vector3d& c = sphere.centre;
+  const double k = c.squaredNorm() - sphere.radius * sphere.radius;
+  const double f = camera.f(), y = (row - camera.cy()) / f;
+  // The ray (x, y, 1) passes within the radius of the centre: k |ray|^2 - (c . ray)^2 <= 0.
+  const double a = k - c.x() * c.x(), cyz = c.y() * y + c.z();
+  if (k <= 0 || a <= 0) return {0, width - 1};
+  const double b = -2 * c.x() * cyz, d = k * (y * y + 1) - cyz * cyz;
+  const double disc = b * b - 4 * a * d;
+  if (disc < 0) return {};
+  const double x0 = (-b - std::sqrt(disc)) / (2 * a), x1 = (-b + std::sqrt(disc)) / (2 * a);
+  const double lo = std::floor(camera.cx() + f * x0) - 1, hi = std::ceil(camera.cx() + f * x1) + 1;
+  if (hi < 0 || lo > width - 1) return {};
+  return {static_cast<int>(std::max(lo, 0.0)), static_cast<int>(std::min<double>(hi, width - 1))};
+}
+
+std::unique_ptr<CentreSamples> CentrePool::take() {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (free_.empty()) return std::make_unique<CentreSamples>();
+  std::unique_ptr<CentreSamples> centre = std::move(free_.back());
+  free_.pop_back();
+  return centre;
+}
+
+void CentrePool::give(std::unique_ptr<CentreSamples> centre) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (free_.size() < 2) free_.push_back(std::move(centre));
+}
+
+void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod method,
+                  CentreSamples& centre) {
+  const SensorGeometry& geometry = shader.geometry;
+  const int width = geometry.config().camera.width, height = geometry.config().camera.height;
+  centre.width = width;
+  centre.height = height;
+  centre.samples.resize(static_cast<std::size_t>(width) * height);  // every one is written
+  centre.ambient.create(height, width, CV_32F);
+  centre.near.create(height, width, CV_8U);
+  const std::vector<std::vector<ColumnSpan>> objects =
+      method == RenderMethod::Culled
+          ? objectColumns(shader)
+          : std::vector<std::vector<ColumnSpan>>(static_cast<std::size_t>(height),
+                                                 {ColumnSpan{0, width - 1}});
+  const FloorAlbedo albedo(shader.scene.floor, method == RenderMethod::Culled
+                                                   ? floorRegion(shader)
+                                                   : Eigen::AlignedBox2d());
+  // The light is traced a little beyond `reach`: the neighbours of a pixel near a sheet then have
+  // their radiance, and the pixel's offset can be seen to be linear (no sub-pixel samples).
+  const double lit = reach + 3 * pixel;
+  parallelRows(height, [&](const cv::Range& rows) {
+    FloorRow floor(shader, albedo);
+    for (int r = rows.start; r < rows.end; ++r) {
+      floor.project(r);
+      Shader::Sample* row = &centre.samples[static_cast<std::size_t>(r) * width];
+      int c = 0;
+      for (const ColumnSpan& span : objects[static_cast<std::size_t>(r)]) {
+        for (; c < span.first; ++c) floor.at(c, lit, row[c]);
+        for (; c <= span.last; ++c) row[c] = shader.trace(c, r, lit);
+      }
+      for (; c < width; ++c) floor.at(c, lit, row[c]);
+      for (c = 0; c < width; ++c) finish(centre, shader, r, c, reach, pixel);
+    }
+  });
+  // Catch pixels split by an edge.
+  cv::dilate(centre.near, centre.near, cv::Mat::ones(3, 3, CV_8U));
+}
+
+}  // namespace multislit

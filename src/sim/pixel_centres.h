@@ -1,0 +1,67 @@
+// The samples of every pixel centre (private to the simulator): the first step of a render.
+#pragma once
+
+#include "sim/shader.h"
+
+#include <opencv2/core/mat.hpp>
+
+#include <memory>
+#include <mutex>
+#include <vector>
+
+namespace multislit {
+
+/// The samples of the pixel centres, row-major, with the light that does not depend on the sheets.
+struct CentreSamples {
+  int width = 0, height = 0;
+  std::vector<Shader::Sample> samples;
+  cv::Mat ambient;  ///< ambient light and glare per pixel, CV_32F [FS]
+  cv::Mat near;     ///< CV_8U: 1 where a sheet may light the pixel
+
+  const Shader::Sample& at(int r, int c) const {
+    return samples[static_cast<std::size_t>(r) * width + c];
+  }
+};
+
+/// Every pixel centre into `centre`: its surface, ambient light and where the laser sheets are
+/// (within `reach` [rad] of a sheet; `pixel` is one pixel's angle [rad]). RenderMethod::Culled
+/// traces the objects only on the pixels their bounds cover and the floor elsewhere in closed
+/// form; Exhaustive traces every ray against every object. Both give the same samples to rounding
+/// (simulator_test).
+void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod method,
+                  CentreSamples& centre);
+
+/// CentreSamples kept from render to render: a frame's are 60 MB, and fresh pages cost more than
+/// tracing the floor. Thread-safe; a render takes one and gives it back.
+class CentrePool {
+ public:
+  std::unique_ptr<CentreSamples> take();
+  void give(std::unique_ptr<CentreSamples> centre);
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<CentreSamples>> free_;
+};
+
+/// A sphere that bounds (part of) an object, in the camera frame [m].
+struct BoundingSphere {
+  Eigen::Vector3d centre;
+  double radius = 0;
+};
+
+/// For each object of `scene`, spheres that together cover it (a cylinder by a chain of them
+/// along its axis, at most 512), in the frame of `frame_from_world`.
+std::vector<std::vector<BoundingSphere>> objectBounds(const Scene& scene,
+                                                      const Eigen::Isometry3d& frame_from_world);
+
+/// For each object, a box of projector coordinates outside which its shadow cannot fall.
+std::vector<ShadowBox> shadowBoxes(const Shader& shader);
+
+/// Columns [first, last] of image row `row` whose pixel-centre rays may meet `sphere`, widened by
+/// a pixel; first > last when none.
+struct ColumnSpan {
+  int first = 0, last = -1;
+};
+ColumnSpan sphereColumns(const SensorGeometry& geometry, const BoundingSphere& sphere, int row);
+
+}  // namespace multislit
