@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # map_command: `multislit map` end to end, as a user runs it.
 #  1. A walk recorded (walk --record) and replayed (map --sequence): the same occupied voxels.
-#  2. multislit emulate serving a walk as a GigE Vision camera on 127.0.0.1 -> map --camera.
+#  2. multislit emulate serving a walk as a GigE Vision camera on 127.0.0.1 -> map --camera;
+#     emulate --walk rendering the demo's walk live -> map --camera --poses gait.
 #  3. Bad odometry files and missing options: a clear message naming the file, and rc != 0.
 # Run as: bash map_command.sh <multislit> <work dir>
 set -u
@@ -51,6 +52,26 @@ echo "map --camera 127.0.0.1: 20 frames, $cam occupied voxels (the ball)"
 [[ $cam -gt 0 ]] || fail "the ball is not in the camera's map"
 kill $emulator 2>/dev/null
 wait $emulator 2>/dev/null
+
+# The demo's walk rendered live; a frame not rendered in time carries the last image again.
+"$multislit" emulate --walk --seconds 120 >"$work/live.log" 2>&1 &
+emulator=$!
+for _ in $(seq 1 600); do
+  grep -q "GigE Vision camera" "$work/live.log" && break
+  kill -0 $emulator 2>/dev/null || fail "emulate --walk died: $(cat "$work/live.log")"
+  sleep 0.1
+done
+grep -q "rendered live" "$work/live.log" || fail "emulate --walk never came up: $(cat "$work/live.log")"
+"$multislit" map --camera 127.0.0.1 --calibration "$work/calib.yaml" --poses gait --frames 20 \
+  --out "$work/live" >"$work/live_map.log" 2>&1 || fail "map on the live walk: $(tail -5 "$work/live_map.log")"
+grep -q "20 processed" "$work/live/summary.txt" || fail "map on the live walk: not 20 frames"
+kill -INT $emulator 2>/dev/null
+wait $emulator
+rc=$?
+[[ $rc == 130 ]] || fail "emulate --walk after Ctrl-C: rc $rc, not 130"
+rendered=$(sed -n 's/.*; \([0-9]*\) rendered, \([0-9]*\) sent late.*/\1/p' "$work/live.log" | tail -1)
+[[ -n $rendered && $rendered -ge 2 ]] || fail "emulate --walk rendered no walk: $(tail -2 "$work/live.log")"
+echo "emulate --walk: $(tail -1 "$work/live.log")"
 trap - EXIT
 
 # 3. Ctrl-C: the run ends at a frame boundary, every file complete, rc 130.

@@ -8,10 +8,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 
 namespace multislit {
 
@@ -47,7 +51,86 @@ void EmulatorConfig::validate() const {
     fail("lost_packet_ratio", "must be in [0, 1]");
 }
 
+// Live images: made on a thread of their own, a few ahead of the camera, taken in turn.
+class LiveImages {
+ public:
+  // `first`: the image served until the next is made.
+  LiveImages(CameraEmulator::ImageMaker make, const cv::Mat& first, std::size_t ahead)
+      : make_(std::move(make)),
+        size_(first.size()),
+        type_(first.type()),
+        ahead_(std::max<std::size_t>(1, ahead)),
+        last_(first) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~LiveImages() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    changed_.notify_all();
+    thread_.join();  // after at most the image being made
+  }
+
+  // The next image, or the last one again when none is ready (late).
+  cv::Mat take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (ready_.empty()) {
+      ++late_;
+      return last_;
+    }
+    last_ = ready_.front();
+    ready_.pop_front();
+    changed_.notify_all();
+    return last_;
+  }
+  std::uint64_t late() const { return late_; }
+  std::uint64_t made() const { return made_; }
+  std::string error() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return error_;
+  }
+
+ private:
+  void run() {
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [&] { return stop_ || ready_.size() < ahead_; });
+        if (stop_) return;
+      }
+      cv::Mat image;
+      try {
+        image = make_();
+        if (image.size() != size_ || image.type() != type_)
+          throw std::runtime_error("a live image of another size or type");
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = e.what();
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mutex_);
+      ready_.push_back(image.isContinuous() ? image : image.clone());
+      ++made_;
+    }
+  }
+
+  CameraEmulator::ImageMaker make_;
+  cv::Size size_;
+  int type_;
+  std::size_t ahead_;
+  cv::Mat last_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  std::deque<cv::Mat> ready_;
+  bool stop_ = false;
+  std::string error_;
+  std::atomic<std::uint64_t> late_{0}, made_{0};
+  std::thread thread_;  // last: it starts when everything else is in place
+};
+
 struct CameraEmulator::Impl {
+  std::unique_ptr<LiveImages> live;                     // live images, or
   std::vector<cv::Mat> images;                          // continuous, same size and type
   ArvPixelFormat own_format = ARV_PIXEL_FORMAT_MONO_8;  // the images'
   bool keep_format = false;
@@ -88,7 +171,8 @@ struct CameraEmulator::Impl {
         static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, &reported)));
     if (out == nullptr || width <= 0 || height <= 0) return;
     const int out_depth = format == ARV_PIXEL_FORMAT_MONO_8 ? CV_8U : CV_16U;
-    const cv::Mat& image = self->images[self->index(arv_buffer_get_frame_id(buffer))];
+    const cv::Mat image = self->live ? self->live->take()
+                                     : self->images[self->index(arv_buffer_get_frame_id(buffer))];
     cv::Mat target(height, width, out_depth, out);
     target.setTo(0);
     // The requested region of the image, converted to the requested depth.
@@ -116,6 +200,28 @@ CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig
       throw std::invalid_argument("CameraEmulator: images must share size and type");
     impl_->images.push_back(image.isContinuous() ? image : image.clone());
   }
+  start(images.front().size(), images.front().type(), config);
+}
+
+CameraEmulator::CameraEmulator(ImageMaker make, cv::Size size, int type,
+                               const EmulatorConfig& config, std::size_t ahead)
+    : impl_(std::make_unique<Impl>()) {
+  config.validate();
+  if (type != CV_8UC1 && type != CV_16UC1)
+    throw std::invalid_argument("CameraEmulator: images must be CV_8UC1 or CV_16UC1");
+  if (size.width <= 0 || size.height <= 0)
+    throw std::invalid_argument("CameraEmulator: live images need a size");
+  if (!make) throw std::invalid_argument("CameraEmulator: no image maker");
+  // The first image before the camera answers: every frame it sends carries one.
+  cv::Mat first = make();
+  if (first.size() != size || first.type() != type)
+    throw std::invalid_argument("CameraEmulator: the first live image has another size or type");
+  impl_->images.push_back(first.isContinuous() ? first : first.clone());
+  impl_->live = std::make_unique<LiveImages>(std::move(make), impl_->images.front(), ahead);
+  start(size, type, config);
+}
+
+void CameraEmulator::start(cv::Size size, int type, const EmulatorConfig& config) {
   if (!gvcpPortFree())
     throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
                              ":3956: the port is taken (another multislit emulate or camera?)");
@@ -126,14 +232,14 @@ CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig
 
   // A sensor of the images' size, streaming all of it at the configured rate.
   ArvFakeCamera* fake = arv_gv_fake_camera_get_fake_camera(impl_->camera.get());
-  const auto width = static_cast<guint32>(impl_->images.front().cols);
-  const auto height = static_cast<guint32>(impl_->images.front().rows);
+  const auto width = static_cast<guint32>(size.width);
+  const auto height = static_cast<guint32>(size.height);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, width);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
   impl_->own_format =
-      impl_->images.front().depth() == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
+      CV_MAT_DEPTH(type) == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
   impl_->keep_format = config.keep_pixel_format;
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, impl_->own_format);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
@@ -160,6 +266,16 @@ std::size_t CameraEmulator::imageIndex(std::uint64_t frame_id, std::size_t image
 }
 
 std::uint64_t CameraEmulator::framesServed() const { return impl_->served; }
+
+std::uint64_t CameraEmulator::framesLate() const { return impl_->live ? impl_->live->late() : 0; }
+
+std::uint64_t CameraEmulator::imagesMade() const {
+  return impl_->live ? impl_->live->made() + 1 : impl_->images.size();  // + the first
+}
+
+std::string CameraEmulator::lastError() const {
+  return impl_->live ? impl_->live->error() : std::string();
+}
 
 void CameraEmulator::setLostPacketRatio(double ratio) {
   if (!(ratio >= 0 && ratio <= 1))

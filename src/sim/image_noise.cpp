@@ -35,6 +35,12 @@ MULTISLIT_AVX2_CLONES void addSensorNoise(const float* __restrict e, const float
   }
 }
 
+// out[c] = value[c] x full rounded (value in [0, 1]): a loop the compiler vectorizes.
+template <typename T>
+void quantize(const float* __restrict value, float full, T* __restrict out, int n) {
+  for (int c = 0; c < n; ++c) out[c] = static_cast<T>(static_cast<int>(value[c] * full + 0.5f));
+}
+
 }  // namespace
 
 // Gamma(shape k, mean 1) quantile at the normal quantile of each z of the table.
@@ -117,13 +123,11 @@ cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t fr
                      irradiance.cols, per_electron, read_variance);
       if (render.gamma != 1.0)
         for (float& v : value) v = static_cast<float>(std::pow(v, 1.0 / render.gamma));
-      for (int c = 0; c < irradiance.cols; ++c) {
-        const auto dn = static_cast<unsigned>(value[static_cast<std::size_t>(c)] * full + 0.5f);
-        if (render.bit_depth == 8)
-          image.ptr<uint8_t>(r)[c] = static_cast<uint8_t>(dn);
-        else
-          image.ptr<uint16_t>(r)[c] = static_cast<uint16_t>(dn);
-      }
+      // Rounded to the nearest DN: value is in [0, 1].
+      if (render.bit_depth == 8)
+        quantize(value.data(), full, image.ptr<uint8_t>(r), irradiance.cols);
+      else
+        quantize(value.data(), full, image.ptr<uint16_t>(r), irradiance.cols);
     }
   });
   return image;

@@ -118,22 +118,30 @@ class FloorRow {
   /// Writes column c's sample into `s`.
   void at(int c, double reach, Shader::Sample& s) const {
     const auto k = static_cast<std::size_t>(c);
-    s = Shader::Sample{};
-    if (!(depth_[k] < 0) || !(shader_.camera_centre.z() > 0)) return;  // above the horizon
+    if (!(depth_[k] < 0) || !(shader_.camera_centre.z() > 0)) {  // above the horizon
+      s = Shader::Sample{};
+      return;
+    }
     s.object = 0;
-    const Eigen::Vector2d xy(x_[k], y_[k]);
-    s.offset = offset_[k];
     s.slit = static_cast<std::int16_t>(slit_[k]);
-    s.t = static_cast<float>(xy.y());
-    const Eigen::Vector3d point_w(px_[k], py_[k], 0.0);
+    s.t = static_cast<float>(y_[k]);
+    s.offset = offset_[k];
     s.albedo = static_cast<float>(albedo_row_[k]);
-    shader_.glare(s, point_w, w0_ + c * w1_);
-    shader_.illuminate(s, xy, Eigen::Vector3d::UnitZ(), point_w, reach);
+    s.radiance = 0;
+    s.glare = 0;
+    s.width = 1;
+    if (glossy_ || std::abs(s.offset) <= reach) {
+      const Eigen::Vector3d point_w(px_[k], py_[k], 0.0);
+      shader_.glare(s, point_w, w0_ + c * w1_);
+      shader_.illuminate(s, Eigen::Vector2d(x_[k], y_[k]), Eigen::Vector3d::UnitZ(), point_w,
+                         reach);
+    }
   }
 
  private:
   const Shader& shader_;
   const FloorAlbedo& albedo_;
+  bool glossy_ = shader_.scene.floor.gloss > 0;
   int width_;
   Eigen::Vector3d w0_, w1_;  // the world ray of column c: w0 + c w1
   std::vector<double> depth_, x_, y_, px_, py_, offset_, albedo_row_;
@@ -157,16 +165,6 @@ Eigen::AlignedBox2d floorRegion(const Shader& shader) {
     }
   }
   return region;
-}
-
-// Sets the ambient light of pixel (r, c) from its sample and whether a sheet may light it.
-inline void finish(CentreSamples& centre, const Shader& shader, int r, int c, double reach,
-                   double pixel) {
-  const Shader::Sample& s = centre.samples[static_cast<std::size_t>(r) * centre.width + c];
-  centre.ambient.ptr<float>(r)[c] =
-      static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
-  centre.near.ptr<uchar>(r)[c] =
-      std::abs(s.offset) < reach && std::abs(s.t) < shader.geometry.slitTMax() + 2 * pixel;
 }
 
 }  // namespace
@@ -283,19 +281,25 @@ void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod
                                                    : Eigen::AlignedBox2d());
   // The light is traced a little beyond `reach`: the neighbours of a pixel near a sheet then have
   // their radiance, and the pixel's offset can be seen to be linear (no sub-pixel samples).
-  const double lit = reach + 3 * pixel;
+  const double lit = reach + 3 * pixel, t_near = geometry.slitTMax() + 2 * pixel;
   parallelRows(height, [&](const cv::Range& rows) {
     FloorRow floor(shader, albedo);
     for (int r = rows.start; r < rows.end; ++r) {
       floor.project(r);
       Shader::Sample* row = &centre.samples[static_cast<std::size_t>(r) * width];
       int c = 0;
+      float* ambient = centre.ambient.ptr<float>(r);
+      uchar* near = centre.near.ptr<uchar>(r);
+      auto finish = [&](int k) {  // the ambient light, and whether a sheet may light the pixel
+        const Shader::Sample& s = row[k];
+        ambient[k] = static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
+        near[k] = std::abs(s.offset) < reach && std::abs(s.t) < t_near;
+      };
       for (const ColumnSpan& span : objects[static_cast<std::size_t>(r)]) {
-        for (; c < span.first; ++c) floor.at(c, lit, row[c]);
-        for (; c <= span.last; ++c) row[c] = shader.trace(c, r, lit);
+        for (; c < span.first; ++c) floor.at(c, lit, row[c]), finish(c);
+        for (; c <= span.last; ++c) row[c] = shader.trace(c, r, lit), finish(c);
       }
-      for (; c < width; ++c) floor.at(c, lit, row[c]);
-      for (c = 0; c < width; ++c) finish(centre, shader, r, c, reach, pixel);
+      for (; c < width; ++c) floor.at(c, lit, row[c]), finish(c);
     }
   });
   // Catch pixels split by an edge.

@@ -49,7 +49,7 @@ inline bool offsetIsLinear(const CentreSamples& centre, int r, int c, double t_i
 cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double reach,
                        double pixel) {
   const int n = shader.render.supersample, width = centre.width, height = centre.height;
-  const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 3 * pixel;
+  const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 1.5 * pixel;
   cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
   parallelRows(height, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {

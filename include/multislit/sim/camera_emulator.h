@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,14 @@ class CameraEmulator {
   /// `images`: one or more images of the same size and type (CV_8UC1 or CV_16UC1). Throws
   /// std::invalid_argument for bad images, std::runtime_error when 127.0.0.1:3956 is taken.
   explicit CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig& config = {});
+  /// Makes the next image of an endless sequence (on the emulator's own thread).
+  using ImageMaker = std::function<cv::Mat()>;
+  /// Live: the images are made on the fly by `make`, each of `size` and `type`, on a thread of
+  /// the emulator's that keeps up to `ahead` of them ready; every frame sent takes the next one,
+  /// or, when none is ready in time, the last one again (counted by framesLate()). An image of
+  /// another size or type ends the making (lastError()).
+  CameraEmulator(ImageMaker make, cv::Size size, int type, const EmulatorConfig& config = {},
+                 std::size_t ahead = 3);
   ~CameraEmulator();
   CameraEmulator(const CameraEmulator&) = delete;
   CameraEmulator& operator=(const CameraEmulator&) = delete;
@@ -42,10 +51,16 @@ class CameraEmulator {
   /// The same for any emulator serving `image_count` images (one that is gone, or not yet made).
   static std::size_t imageIndex(std::uint64_t frame_id, std::size_t image_count);
   std::uint64_t framesServed() const;
+  /// Live: the frames sent with the last image again because the next was not made in time.
+  std::uint64_t framesLate() const;
+  /// Live: the images made so far, and why the making stopped ("" while it goes on).
+  std::uint64_t imagesMade() const;
+  std::string lastError() const;
   /// 1 makes a camera that answers control requests but sends no image; from the next frame.
   void setLostPacketRatio(double ratio);
 
  private:
+  void start(cv::Size size, int type, const EmulatorConfig& config);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
