@@ -1,6 +1,6 @@
 // MultiSlitGrabber end to end over GigE Vision on 127.0.0.1 (CameraEmulator + AravisSource):
 // the clouds of the served images, 1, 5 and 10 % of packets lost, stop() with a silent or vanished
-// camera, start / stop cycles, full-size throughput and latency.
+// camera, start / stop cycles, full-size throughput and latency, live images made as they are sent.
 #include "gige_sim_support.h"
 #include "multislit/grabber.h"
 
@@ -213,6 +213,45 @@ TEST(GigEVision, StartStopCycles) {
   EXPECT_LT(worst_ms, 1000.0);
   EXPECT_GT(clouds, 0);
   EXPECT_EQ(grabber.getStats().source.reconnects, 0u);
+}
+
+// Live images (multislit emulate --walk): made on the emulator's thread while the camera sends,
+// taken in turn; one not made in time is sent as the last one again and counted. Each image here
+// carries its number in its pixels and takes 150 ms to make, 4.5 frames at 30 Hz.
+TEST(GigEVision, LiveImagesComeInTurnAndLateOnesRepeatTheLast) {
+  const cv::Size size = simData().frames[0].size();
+  std::atomic<int> made{0};
+  CameraEmulator::ImageMaker make = [&] {
+    std::this_thread::sleep_for(milliseconds(150));
+    return cv::Mat(size, CV_8UC1, cv::Scalar(20 + made++ % 200));
+  };
+  std::unique_ptr<CameraEmulator> emulator;
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  while (!emulator && Clock::now() < deadline) {
+    try {
+      emulator = std::make_unique<CameraEmulator>(make, size, CV_8UC1);
+    } catch (const std::runtime_error&) {  // the port is taken: wait for the other camera
+      std::this_thread::sleep_for(milliseconds(200));
+    }
+  }
+  REQUIRE_EMULATOR(emulator);
+  const std::shared_ptr<AravisSource> source = gigeSource(30);
+  source->start();
+  std::vector<int> values;
+  for (int tries = 0; values.size() < 40 && tries < 400; ++tries)
+    if (const std::optional<Frame> f = source->next(milliseconds(200)))
+      values.push_back(f->image.at<std::uint8_t>(f->image.rows / 2, f->image.cols / 2));
+  source->stop();
+  ASSERT_EQ(values.size(), 40u);
+  int increases = 0;
+  for (std::size_t k = 1; k < values.size(); ++k) {
+    EXPECT_GE(values[k], values[k - 1]) << "frame " << k << ": an image older than the last";
+    increases += values[k] > values[k - 1];
+  }
+  EXPECT_GE(increases, 3);                // new images keep coming
+  EXPECT_GT(emulator->framesLate(), 0u);  // and the camera did not wait for them
+  EXPECT_GE(emulator->imagesMade(), static_cast<std::uint64_t>(increases));
+  EXPECT_EQ(emulator->lastError(), "");
 }
 
 TEST(GigEVision, FullSizeThroughputAndLatency) {

@@ -222,6 +222,10 @@ CameraEmulator::CameraEmulator(ImageMaker make, cv::Size size, int type,
 }
 
 void CameraEmulator::start(cv::Size size, int type, const EmulatorConfig& config) {
+  // What the camera's thread reads, set before the camera (and its thread) starts.
+  impl_->own_format =
+      CV_MAT_DEPTH(type) == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
+  impl_->keep_format = config.keep_pixel_format;
   if (!gvcpPortFree())
     throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
                              ":3956: the port is taken (another multislit emulate or camera?)");
@@ -238,9 +242,6 @@ void CameraEmulator::start(cv::Size size, int type, const EmulatorConfig& config
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, height);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_WIDTH, width);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_HEIGHT, height);
-  impl_->own_format =
-      CV_MAT_DEPTH(type) == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
-  impl_->keep_format = config.keep_pixel_format;
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, impl_->own_format);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                  static_cast<guint32>(1e6 / config.fps));

@@ -43,15 +43,12 @@ bool FloorAlbedo::Octave::addRow(const double* x, const double* y, double* g, in
   if (table.empty() || columns > (1 << 20)) return false;
   const double x_hi = static_cast<double>(columns - 1), y_hi = static_cast<double>(rows - 1);
   const double ox = static_cast<double>(x0), oy = static_cast<double>(y0);
-  double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0, sum = 0;  // of the row's lattice coordinates
-  if (n > 0) lo_x = hi_x = x[0] * scale_x - ox, lo_y = hi_y = y[0] * scale_y - oy;
-  for (int i = 0; i < n; ++i) {  // no early exit: a loop the compiler vectorizes
+  int outside = 0;  // points off the table, NaN included: a loop the compiler vectorizes
+  for (int i = 0; i < n; ++i) {
     const double xs = x[i] * scale_x - ox, ys = y[i] * scale_y - oy;
-    lo_x = std::min(lo_x, xs), hi_x = std::max(hi_x, xs);
-    lo_y = std::min(lo_y, ys), hi_y = std::max(hi_y, ys);
-    sum += xs + ys;  // NaN when any is: min and max pass NaN over
+    outside += !((xs >= 0) & (xs < x_hi) & (ys >= 0) & (ys < y_hi));
   }
-  if (!(lo_x >= 0 && hi_x < x_hi && lo_y >= 0 && hi_y < y_hi && std::isfinite(sum))) return false;
+  if (outside > 0) return false;
   addNoiseRow(x, y, g, n, table.data(), static_cast<int>(columns), scale_x, scale_y, ox, oy,
               weight);
   return true;
