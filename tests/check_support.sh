@@ -1,4 +1,5 @@
-# Sourced by the bash checks (cli_check, outputs_check, map_command): their common steps.
+# Sourced by the bash checks (cli_check, outputs_check, map_command, grabber_example): their
+# common steps.
 
 # start_in DIR: DIR made afresh, empty, and the current folder.
 start_in() {

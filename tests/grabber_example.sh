@@ -11,11 +11,8 @@ set -u
 M=$(realpath "$1")
 E=$(realpath "$2")
 work=$3
-rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
-fail() {
-  echo "FAIL: $*"
-  exit 1
-}
+source "$(dirname "${BASH_SOURCE[0]}")/check_support.sh"
+start_in "$work"
 # expect RC MESSAGE COMMAND...: the command exits with RC, its output saying MESSAGE.
 expect() {
   local rc=$1 message=$2
