@@ -39,6 +39,15 @@ bool gvcpPortFree() {
   return free;
 }
 
+// The pixel types a camera serves (Mono8, Mono16).
+void requireMono(int type) {
+  if (type != CV_8UC1 && type != CV_16UC1)
+    throw std::invalid_argument("CameraEmulator: images must be CV_8UC1 or CV_16UC1");
+}
+
+// `image` with its rows one after another in memory, as the camera's buffer copy needs it.
+cv::Mat continuous(const cv::Mat& image) { return image.isContinuous() ? image : image.clone(); }
+
 }  // namespace
 
 void EmulatorConfig::validate() const {
@@ -110,7 +119,7 @@ class LiveImages {
         return;
       }
       std::lock_guard<std::mutex> lock(mutex_);
-      ready_.push_back(image.isContinuous() ? image : image.clone());
+      ready_.push_back(continuous(image));
       ++made_;
     }
   }
@@ -194,11 +203,10 @@ CameraEmulator::CameraEmulator(std::vector<cv::Mat> images, const EmulatorConfig
   config.validate();
   if (images.empty()) throw std::invalid_argument("CameraEmulator: no images");
   for (cv::Mat& image : images) {
-    if (image.type() != CV_8UC1 && image.type() != CV_16UC1)
-      throw std::invalid_argument("CameraEmulator: images must be CV_8UC1 or CV_16UC1");
+    requireMono(image.type());
     if (image.size() != images.front().size() || image.type() != images.front().type())
       throw std::invalid_argument("CameraEmulator: images must share size and type");
-    impl_->images.push_back(image.isContinuous() ? image : image.clone());
+    impl_->images.push_back(continuous(image));
   }
   start(images.front().size(), images.front().type(), config);
 }
@@ -207,8 +215,7 @@ CameraEmulator::CameraEmulator(ImageMaker make, cv::Size size, int type,
                                const EmulatorConfig& config, std::size_t ahead)
     : impl_(std::make_unique<Impl>()) {
   config.validate();
-  if (type != CV_8UC1 && type != CV_16UC1)
-    throw std::invalid_argument("CameraEmulator: images must be CV_8UC1 or CV_16UC1");
+  requireMono(type);
   if (size.width <= 0 || size.height <= 0)
     throw std::invalid_argument("CameraEmulator: live images need a size");
   if (!make) throw std::invalid_argument("CameraEmulator: no image maker");
@@ -216,7 +223,7 @@ CameraEmulator::CameraEmulator(ImageMaker make, cv::Size size, int type,
   cv::Mat first = make();
   if (first.size() != size || first.type() != type)
     throw std::invalid_argument("CameraEmulator: the first live image has another size or type");
-  impl_->images.push_back(first.isContinuous() ? first : first.clone());
+  impl_->images.push_back(continuous(first));
   impl_->live = std::make_unique<LiveImages>(std::move(make), impl_->images.front(), ahead);
   start(size, type, config);
 }

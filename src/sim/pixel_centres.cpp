@@ -11,9 +11,72 @@
 namespace multislit {
 namespace {
 
+// A sphere that bounds (part of) an object [m].
+struct BoundingSphere {
+  Eigen::Vector3d centre;
+  double radius = 0;
+};
+
+// Columns (or rows) [first, last]; first > last when none.
+struct ColumnSpan {
+  int first = 0, last = -1;
+};
+
 // A margin on every bound, for rounding in the tests below [m].
 constexpr double kBoundMargin = 1e-7;
 constexpr int kMaxChain = 512;  // spheres per cylinder
+
+// For each object of `scene`, spheres that together cover it (a cylinder by a chain of them along
+// its axis, at most kMaxChain), in the frame of `frame_from_world`.
+std::vector<std::vector<BoundingSphere>> objectBounds(const Scene& scene,
+                                                      const Eigen::Isometry3d& frame_from_world) {
+  std::vector<std::vector<BoundingSphere>> bounds;
+  for (const SceneObject& o : scene.objects) {
+    std::vector<BoundingSphere>& spheres = bounds.emplace_back();
+    auto add = [&](const Eigen::Vector3d& centre_w, double radius) {
+      spheres.push_back({frame_from_world * centre_w, radius * (1 + 1e-9) + kBoundMargin});
+    };
+    switch (o.type) {
+      case ShapeType::Sphere:
+        add(o.centre, o.radius);
+        break;
+      case ShapeType::Box:
+        add(o.centre, 0.5 * o.size.norm());
+        break;
+      case ShapeType::Cylinder: {
+        const Eigen::Vector3d axis = o.axis_end - o.axis_start;
+        const double length = axis.norm();
+        const int n = static_cast<int>(
+            std::clamp(std::ceil(length / (2 * o.radius)), 1.0, static_cast<double>(kMaxChain)));
+        const double half = 0.5 * length / n;
+        for (int i = 0; i < n; ++i)
+          add(o.axis_start + (i + 0.5) / n * axis, std::sqrt(o.radius * o.radius + half * half));
+        break;
+      }
+    }
+  }
+  return bounds;
+}
+
+// Columns [first, last] of image row `row` whose pixel-centre rays may meet `sphere`, widened by
+// a pixel.
+ColumnSpan sphereColumns(const SensorGeometry& geometry, const BoundingSphere& sphere, int row) {
+  const CameraConfig& camera = geometry.config().camera;
+  const int width = camera.width;
+  const Eigen::Vector3d& c = sphere.centre;
+  const double k = c.squaredNorm() - sphere.radius * sphere.radius;
+  const double f = camera.f(), y = (row - camera.cy()) / f;
+  // The ray (x, y, 1) passes within the radius of the centre: k |ray|^2 - (c . ray)^2 <= 0.
+  const double a = k - c.x() * c.x(), cyz = c.y() * y + c.z();
+  if (k <= 0 || a <= 0) return {0, width - 1};
+  const double b = -2 * c.x() * cyz, d = k * (y * y + 1) - cyz * cyz;
+  const double disc = b * b - 4 * a * d;
+  if (disc < 0) return {};
+  const double x0 = (-b - std::sqrt(disc)) / (2 * a), x1 = (-b + std::sqrt(disc)) / (2 * a);
+  const double lo = std::floor(camera.cx() + f * x0) - 1, hi = std::ceil(camera.cx() + f * x1) + 1;
+  if (hi < 0 || lo > width - 1) return {};
+  return {static_cast<int>(std::max(lo, 0.0)), static_cast<int>(std::min<double>(hi, width - 1))};
+}
 
 // Rows [first, last] whose plane of rays (through the camera centre and the row's pixel centres)
 // may meet `sphere`, widened by a row; first > last when none.
@@ -148,56 +211,7 @@ class FloorRow {
   std::vector<int> slit_;
 };
 
-// The floor the camera sees, within 5 m (the rays of every 8th pixel): where its texture is
-// tabulated.
-Eigen::AlignedBox2d floorRegion(const Shader& shader) {
-  const CameraConfig& camera = shader.geometry.config().camera;
-  const Eigen::Vector3d& o = shader.camera_centre;
-  Eigen::AlignedBox2d region;
-  for (int r = 0; r < camera.height + 7; r += 8) {
-    for (int c = 0; c < camera.width + 7; c += 8) {
-      const Eigen::Vector3d ray =
-          shader.world_from_camera.linear() *
-          shader.geometry.pixelRay(std::min(c, camera.width - 1), std::min(r, camera.height - 1));
-      if (!(ray.z() < 0) || !(o.z() > 0)) continue;
-      const Eigen::Vector3d hit = o - o.z() / ray.z() * ray;
-      if ((hit - o).norm() < 5.0) region.extend(hit.head<2>());
-    }
-  }
-  return region;
-}
-
 }  // namespace
-
-std::vector<std::vector<BoundingSphere>> objectBounds(const Scene& scene,
-                                                      const Eigen::Isometry3d& frame_from_world) {
-  std::vector<std::vector<BoundingSphere>> bounds;
-  for (const SceneObject& o : scene.objects) {
-    std::vector<BoundingSphere>& spheres = bounds.emplace_back();
-    auto add = [&](const Eigen::Vector3d& centre_w, double radius) {
-      spheres.push_back({frame_from_world * centre_w, radius * (1 + 1e-9) + kBoundMargin});
-    };
-    switch (o.type) {
-      case ShapeType::Sphere:
-        add(o.centre, o.radius);
-        break;
-      case ShapeType::Box:
-        add(o.centre, 0.5 * o.size.norm());
-        break;
-      case ShapeType::Cylinder: {
-        const Eigen::Vector3d axis = o.axis_end - o.axis_start;
-        const double length = axis.norm();
-        const int n = static_cast<int>(
-            std::clamp(std::ceil(length / (2 * o.radius)), 1.0, static_cast<double>(kMaxChain)));
-        const double half = 0.5 * length / n;
-        for (int i = 0; i < n; ++i)
-          add(o.axis_start + (i + 0.5) / n * axis, std::sqrt(o.radius * o.radius + half * half));
-        break;
-      }
-    }
-  }
-  return bounds;
-}
 
 std::vector<ShadowBox> shadowBoxes(const Shader& shader) {
   const SensorGeometry& g = shader.geometry;
@@ -231,24 +245,6 @@ std::vector<ShadowBox> shadowBoxes(const Shader& shader) {
   return boxes;
 }
 
-ColumnSpan sphereColumns(const SensorGeometry& geometry, const BoundingSphere& sphere, int row) {
-  const CameraConfig& camera = geometry.config().camera;
-  const int width = camera.width;
-  const Eigen::Vector3d& c = sphere.centre;
-  const double k = c.squaredNorm() - sphere.radius * sphere.radius;
-  const double f = camera.f(), y = (row - camera.cy()) / f;
-  // The ray (x, y, 1) passes within the radius of the centre: k |ray|^2 - (c . ray)^2 <= 0.
-  const double a = k - c.x() * c.x(), cyz = c.y() * y + c.z();
-  if (k <= 0 || a <= 0) return {0, width - 1};
-  const double b = -2 * c.x() * cyz, d = k * (y * y + 1) - cyz * cyz;
-  const double disc = b * b - 4 * a * d;
-  if (disc < 0) return {};
-  const double x0 = (-b - std::sqrt(disc)) / (2 * a), x1 = (-b + std::sqrt(disc)) / (2 * a);
-  const double lo = std::floor(camera.cx() + f * x0) - 1, hi = std::ceil(camera.cx() + f * x1) + 1;
-  if (hi < 0 || lo > width - 1) return {};
-  return {static_cast<int>(std::max(lo, 0.0)), static_cast<int>(std::min<double>(hi, width - 1))};
-}
-
 std::unique_ptr<CentreSamples> CentrePool::take() {
   const std::lock_guard<std::mutex> lock(mutex_);
   if (free_.empty()) return std::make_unique<CentreSamples>();
@@ -260,6 +256,23 @@ std::unique_ptr<CentreSamples> CentrePool::take() {
 void CentrePool::give(std::unique_ptr<CentreSamples> centre) {
   const std::lock_guard<std::mutex> lock(mutex_);
   if (free_.size() < 2) free_.push_back(std::move(centre));
+}
+
+Eigen::AlignedBox2d floorInView(const Shader& shader) {
+  const CameraConfig& camera = shader.geometry.config().camera;
+  const Eigen::Vector3d& o = shader.camera_centre;
+  Eigen::AlignedBox2d region;
+  for (int r = 0; r < camera.height + 7; r += 8) {
+    for (int c = 0; c < camera.width + 7; c += 8) {
+      const Eigen::Vector3d ray =
+          shader.world_from_camera.linear() *
+          shader.geometry.pixelRay(std::min(c, camera.width - 1), std::min(r, camera.height - 1));
+      if (!(ray.z() < 0) || !(o.z() > 0)) continue;
+      const Eigen::Vector3d hit = o - o.z() / ray.z() * ray;
+      if ((hit - o).norm() < 5.0) region.extend(hit.head<2>());
+    }
+  }
+  return region;
 }
 
 void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod method,
@@ -276,16 +289,13 @@ void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod
           ? objectColumns(shader)
           : std::vector<std::vector<ColumnSpan>>(static_cast<std::size_t>(height),
                                                  {ColumnSpan{0, width - 1}});
-  const FloorAlbedo albedo(shader.scene.floor, method == RenderMethod::Culled
-                                                   ? floorRegion(shader)
-                                                   : Eigen::AlignedBox2d());
   // The light is traced a little beyond `reach`: the neighbours of a pixel near a sheet then have
   // their radiance, and the pixel's offset can be seen to be linear (no sub-pixel samples).
   const double lit = reach + 3 * pixel, t_near = geometry.slitTMax() + 2 * pixel;
   parallelRows(height, [&](const cv::Range& rows) {
-    FloorRow floor(shader, albedo);
+    FloorRow floor(shader, *shader.floor_albedo);
     for (int r = rows.start; r < rows.end; ++r) {
-      floor.project(r);
+      if (method == RenderMethod::Culled) floor.project(r);  // Exhaustive traces every ray
       Shader::Sample* row = &centre.samples[static_cast<std::size_t>(r) * width];
       int c = 0;
       float* ambient = centre.ambient.ptr<float>(r);

@@ -26,12 +26,12 @@ struct CentreSamples {
 /// Every pixel centre into `centre`: its surface, ambient light and where the laser sheets are
 /// (within `reach` [rad] of a sheet; `pixel` is one pixel's angle [rad]). RenderMethod::Culled
 /// traces the objects only on the pixels their bounds cover and the floor elsewhere in closed
-/// form; Exhaustive traces every ray against every object. Both give the same samples to rounding
-/// (simulator_test).
+/// form; Exhaustive traces every ray against every object. Both give the same image to rounding
+/// (render_methods_test). The floor's albedo is shader.floor_albedo's (required).
 void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod method,
                   CentreSamples& centre);
 
-/// CentreSamples kept from render to render: a frame's are 60 MB, and fresh pages cost more than
+/// CentreSamples kept from render to render: a frame's are 40 MB, and fresh pages cost more than
 /// tracing the floor. Thread-safe; a render takes one and gives it back.
 class CentrePool {
  public:
@@ -43,25 +43,11 @@ class CentrePool {
   std::vector<std::unique_ptr<CentreSamples>> free_;
 };
 
-/// A sphere that bounds (part of) an object, in the camera frame [m].
-struct BoundingSphere {
-  Eigen::Vector3d centre;
-  double radius = 0;
-};
-
-/// For each object of `scene`, spheres that together cover it (a cylinder by a chain of them
-/// along its axis, at most 512), in the frame of `frame_from_world`.
-std::vector<std::vector<BoundingSphere>> objectBounds(const Scene& scene,
-                                                      const Eigen::Isometry3d& frame_from_world);
-
 /// For each object, a box of projector coordinates outside which its shadow cannot fall.
 std::vector<ShadowBox> shadowBoxes(const Shader& shader);
 
-/// Columns [first, last] of image row `row` whose pixel-centre rays may meet `sphere`, widened by
-/// a pixel; first > last when none.
-struct ColumnSpan {
-  int first = 0, last = -1;
-};
-ColumnSpan sphereColumns(const SensorGeometry& geometry, const BoundingSphere& sphere, int row);
+/// The floor the camera sees, within 5 m (the rays of every 8th pixel): where the floor's texture
+/// is worth tabulating.
+Eigen::AlignedBox2d floorInView(const Shader& shader);
 
 }  // namespace multislit

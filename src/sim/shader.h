@@ -41,6 +41,8 @@ struct Shader {
   double sigma;  ///< the sheet's width as rendered, before the surface's factor [rad]
   /// Where objects may shadow the laser; null: every light ray is tested against every object.
   const std::vector<ShadowBox>* casters = nullptr;
+  /// The floor's albedo, made once per render; null: Scene::albedo() point by point.
+  const FloorAlbedo* floor_albedo = nullptr;
 
   /// What one ray sees: the laser's radiance is 0 when shadowed, facing away or beyond the
   /// slit's end.
@@ -73,7 +75,9 @@ struct Shader {
   void surface(Sample& s, const Eigen::Vector3d& point_w, const Eigen::Vector3d& ray_w,
                int known_object = -2, double known_albedo = 0) const {
     s.albedo = static_cast<float>(s.object == known_object ? known_albedo
-                                                           : scene.albedo(s.object, point_w));
+                                  : s.object == 0 && floor_albedo
+                                      ? floor_albedo->at(point_w.x(), point_w.y())
+                                      : scene.albedo(s.object, point_w));
     glare(s, point_w, ray_w);
   }
   /// The glare part of surface().

@@ -131,6 +131,10 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   const double reach = sheetReach(scene, sigma, pixel);
   const std::vector<ShadowBox> casters = shadowBoxes(shader);
   if (render_.method == RenderMethod::Culled) shader.casters = &casters;
+  const FloorAlbedo floor_albedo(scene.floor, render_.method == RenderMethod::Culled
+                                                  ? floorInView(shader)
+                                                  : Eigen::AlignedBox2d());
+  shader.floor_albedo = &floor_albedo;
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
   std::unique_ptr<CentreSamples> buffers = pool_->take();
