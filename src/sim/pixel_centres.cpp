@@ -201,6 +201,19 @@ class FloorRow {
     }
   }
 
+  /// Column c's sample where an object may be on the ray (r the row that project() was given):
+  /// the object's when the ray meets one before the floor, else at()'s.
+  void traced(int c, int r, double reach, Shader::Sample& s) const {
+    const Eigen::Vector3d ray_c = shader_.geometry.pixelRay(c, r).normalized();
+    const Eigen::Vector3d ray_w = shader_.world_from_camera.linear() * ray_c;
+    const Hit hit = shader_.scene.intersect(shader_.camera_centre, ray_w);
+    if (hit.object > 0)
+      s = shader_.shade(hit, hit.distance * ray_c, shader_.camera_centre + hit.distance * ray_w,
+                        ray_w, reach);
+    else
+      at(c, reach, s);
+  }
+
  private:
   const Shader& shader_;
   const FloorAlbedo& albedo_;
@@ -307,7 +320,13 @@ void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod
       };
       for (const ColumnSpan& span : objects[static_cast<std::size_t>(r)]) {
         for (; c < span.first; ++c) floor.at(c, lit, row[c]), finish(c);
-        for (; c <= span.last; ++c) row[c] = shader.trace(c, r, lit), finish(c);
+        for (; c <= span.last; ++c) {
+          if (method == RenderMethod::Culled)
+            floor.traced(c, r, lit, row[c]);
+          else
+            row[c] = shader.trace(c, r, lit);
+          finish(c);
+        }
       }
       for (; c < width; ++c) floor.at(c, lit, row[c]), finish(c);
     }
