@@ -22,7 +22,7 @@ ReferenceConfig referenceConfigFromArgs(const cli::ArgParser& args) {
   rc.estimator = parseEstimator(args.str("estimator"));
   rc.min_contrast = args.number("min-contrast");
   rc.expected_slits = static_cast<int>(args.integer("slits"));
-  rc.full_scale = args.number("full-scale", 0, 65535);
+  rc.full_scale = fullScaleFromArgs(args);
   return rc;
 }
 
@@ -112,9 +112,7 @@ int runCalibrate(int argc, char** argv) {
   args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
   args.option("min-contrast", "0.06", "slit peak above its background [share of full scale]");
   args.option("slits", "15", "number of slits the projector casts");
-  args.option("full-scale", "0",
-              "the camera's white [DN], 4095 for 12-bit data in 16-bit images; 0: the image "
-              "type's (255 or 65535). Kept in the calibration");
+  addFullScaleOption(args, "the camera's white", "kept in the calibration");
   args.option("camera-id", "",
               "serial number (or DeviceID) of the camera; another is refused when the calibration "
               "is used with a camera");

@@ -18,13 +18,19 @@ void addReferenceOptions(cli::ArgParser& args) {
   args.option("calibration", "", "calibration file from multislit calibrate");
   args.option("reference", "", "reference image of the floor (instead of --calibration)");
   args.option("sensor", "", "sensor YAML; its mount is the reference pose (default: the paper's)");
-  args.option("full-scale", "0",
-              "the --reference image's white [DN], 4095 for 12-bit data in 16-bit images; 0: the "
-              "image type's (a calibration keeps its own)");
+  addFullScaleOption(args, "the --reference image's white", "a calibration keeps its own");
 }
 
+void addFullScaleOption(cli::ArgParser& args, const std::string& whose, const std::string& note) {
+  args.option("full-scale", "0",
+              whose + " [DN], 4095 for 12-bit data in 16-bit images; 0: the image type's (255 or " +
+                  "65535; " + note + ")");
+}
+
+double fullScaleFromArgs(const cli::ArgParser& args) { return args.number("full-scale", 0, 65535); }
+
 Reference referenceFromArgs(const cli::ArgParser& args) {
-  const double full_scale = args.number("full-scale", 0, 65535);
+  const double full_scale = fullScaleFromArgs(args);
   if (args.has("calibration")) {
     if (full_scale > 0)
       throw cli::UsageError("--full-scale goes with --reference; a calibration keeps its own");

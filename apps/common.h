@@ -20,6 +20,10 @@ Estimator parseEstimator(const std::string& name);
 /// Declares --calibration, --reference, --sensor and --full-scale, the ways a command gets its
 /// reference.
 void addReferenceOptions(cli::ArgParser& args);
+/// Declares --full-scale: `whose` white, with `note` on where the value goes.
+void addFullScaleOption(cli::ArgParser& args, const std::string& whose, const std::string& note);
+/// --full-scale's value [DN], checked to lie in [0, 65535].
+double fullScaleFromArgs(const cli::ArgParser& args);
 /// The calibration file when given, else the slits of the reference image with the sensor
 /// model's scale (the reference pose is the mount of --sensor).
 Reference referenceFromArgs(const cli::ArgParser& args);
