@@ -3,15 +3,12 @@
 // image -> RDMap -> floor -> obstacle groups -> OctoMap -> footsteps -> walk / turn / stop.
 #include "cli.h"
 #include "commands.h"
+#include "map_input.h"
 #include "map_outputs.h"
 #include "output_file.h"
 
 #include "multislit/extractor.h"
-#include "multislit/gait.h"
-#include "multislit/odometry.h"
 #include "multislit/pipeline.h"
-#include "multislit/sim/simulated_source.h"
-#include "multislit/sources.h"
 
 #include <unistd.h>
 
@@ -45,107 +42,24 @@ void declareOptions(cli::ArgParser& args) {
   args.option("out", "out/map", "output folder");
 }
 
-/// Where the frames come from, the reference that goes with them, and the sensor on the robot.
-struct Input {
-  std::unique_ptr<FrameSource> source;
-  Reference reference;
-  SensorConfig sensor;
-  std::optional<Scenario> scenario;  ///< --simulate
-  std::string description;
-};
-
-Input openInput(const cli::ArgParser& args) {
-  const int given = args.has("camera") + args.has("sequence") + args.has("simulate");
-  if (given != 1) throw cli::UsageError("give one of --camera, --sequence and --simulate");
-  Input in;
-  const std::filesystem::path sequence = args.str("sequence");
-  if (args.has("sensor"))
-    in.sensor = SensorConfig::load(args.str("sensor"));
-  else if (args.has("sequence") && std::filesystem::exists(sequence / "sensor.yaml"))
-    in.sensor = SensorConfig::load((sequence / "sensor.yaml").string());
-  if (args.has("calibration")) in.reference = Reference::load(args.str("calibration"));
-  if (args.has("simulate")) {
-    SimulatorSourceConfig config;
-    config.scenario = args.str("simulate");
-    config.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
-    auto simulator = std::make_unique<SimulatorSource>(config);
-    if (!args.has("calibration")) in.reference = simulator->makeReference();
-    in.scenario = simulator->scenario();
-    in.sensor.mount = in.scenario->mount;
-    in.description = simulator->name();
-    in.source = std::move(simulator);
-    return in;
-  }
-  if (!args.has("calibration"))
-    throw cli::UsageError("--calibration FILE is needed (the reference of multislit calibrate)");
-  if (args.has("camera")) {
-    AravisConfig config;
-    config.camera = args.str("camera");
-    config.frame_rate = args.number("fps", 0.1, 1000);
-    config.roi_width = in.reference.image_width;
-    config.roi_height = in.reference.image_height;
-    config.camera_id = in.reference.camera_id;  // the camera the calibration was taken with
-    in.source = std::make_unique<AravisSource>(config);
-  } else {
-    ImageSequenceConfig config;
-    config.folder = sequence.string();
-    in.source = std::make_unique<ImageSequenceSource>(config);
-  }
-  in.description = in.source->name();
-  return in;
+MapInputOptions inputOptions(const cli::ArgParser& args) {
+  MapInputOptions o;
+  o.camera = args.str("camera");
+  o.sequence = args.str("sequence");
+  o.simulate = args.str("simulate");
+  o.calibration = args.str("calibration");
+  o.sensor = args.str("sensor");
+  if (args.has("camera")) o.fps = args.number("fps", 0.1, 1000);
+  o.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
+  return o;
 }
 
-/// The robot's pose for each frame: odometry, standing still, the scenario's motion or the gait.
-class Poses {
- public:
-  Poses(const cli::ArgParser& args, const Input& in, const PipelineConfig& pipeline)
-      : gait_(GaitConfig{}, pipeline.foot, pipeline.sensor.mount) {
-    std::string choice = args.str("poses");
-    const std::filesystem::path recorded =
-        std::filesystem::path(args.str("sequence")) / "odometry.csv";
-    if (choice.empty())
-      choice = args.has("sequence") && std::filesystem::exists(recorded) ? recorded.string()
-               : in.scenario                                             ? "scenario"
-                                                                         : "still";
-    if (choice == "scenario" && !in.scenario)
-      throw cli::UsageError("--poses scenario needs --simulate");
-    mode_ = choice == "still" || choice == "gait" || choice == "scenario" ? choice : "file";
-    if (mode_ == "file") {
-      const double gap = args.number("max-gap", 1e-6, 3600);
-      odometry_.emplace(Odometry::load(choice, static_cast<std::uint64_t>(gap * 1e6)));
-    }
-    scenario_ = in.scenario;
-    description_ = mode_ == "file" ? "odometry " + choice : mode_;
-  }
-
-  /// The input of the frame, or nullopt (the reason in `miss`) when it has no pose.
-  std::optional<PipelineInput> at(const Frame& frame, PoseMiss& miss) const {
-    PipelineInput in;
-    miss = PoseMiss::None;
-    if (mode_ == "file") {
-      const auto pose = odometry_->at(frame.stamp_us, &miss);
-      if (!pose) return std::nullopt;
-      in.world_from_robot = *pose;
-    } else if (mode_ == "scenario") {
-      in.world_from_robot = scenario_->worldFromRobot(frame.seq);
-    } else if (mode_ == "gait") {
-      in.world_from_robot = gait_.worldFromRobot();
-      in.next_foot = gait_.nextFoot();
-    }
-    return in;
-  }
-  /// The gait model takes the decision (the other poses do not depend on it).
-  void follow(const WalkerResult& decision) {
-    if (mode_ == "gait") gait_.advance(decision.command, decision.turn_direction);
-  }
-  const std::string& description() const { return description_; }
-
- private:
-  std::string mode_, description_;
-  std::optional<Odometry> odometry_;
-  std::optional<Scenario> scenario_;
-  Gait gait_;
-};
+MapPoseOptions poseOptions(const cli::ArgParser& args) {
+  MapPoseOptions o;
+  o.choice = args.str("poses");
+  o.max_gap = args.number("max-gap");
+  return o;
+}
 
 /// A status line on a terminal, at most twice a second.
 void status(std::size_t frames, double seconds, const PipelineResult& r, std::size_t occupied) {
@@ -175,7 +89,7 @@ struct FrameCounts {
 
 /// Every frame of `source` through the chain, until the source ends, Ctrl-C or `max_frames`
 /// (0: no limit); `t0` the run's start, for the status line. Starts the source.
-FrameCounts processFrames(FrameSource& source, const Extractor& extractor, Poses& poses,
+FrameCounts processFrames(FrameSource& source, const Extractor& extractor, MapPoses& poses,
                           Pipeline& pipeline, MapRecorder& recorder, long max_frames,
                           std::chrono::steady_clock::time_point t0) {
   FrameCounts n;
@@ -232,11 +146,11 @@ int runMap(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);
-  Input in = openInput(args);
+  MapInput in = openMapInput(inputOptions(args));
   PipelineConfig config;
   config.sensor = in.sensor;
   Pipeline pipeline(config);
-  Poses poses(args, in, config);
+  MapPoses poses(poseOptions(args), args.str("sequence"), in, config);
   const Extractor extractor(in.reference);
   MapRecorder recorder(args.str("out"));
 

@@ -1,0 +1,103 @@
+#include "map_input.h"
+
+#include "cli.h"
+
+#include "multislit/sim/simulated_source.h"
+
+#include <filesystem>
+#include <utility>
+
+namespace multislit::apps {
+namespace {
+
+MapInput openSimulator(const MapInputOptions& o, MapInput in) {
+  SimulatorSourceConfig config;
+  config.scenario = o.simulate;
+  config.frames = o.frames;
+  if (o.paced) config.fps = o.fps;
+  auto simulator = std::make_unique<SimulatorSource>(config);
+  if (o.calibration.empty()) in.reference = simulator->makeReference();
+  in.scenario = simulator->scenario();
+  in.sensor.mount = in.scenario->mount;
+  in.description = simulator->name();
+  in.source = std::move(simulator);
+  return in;
+}
+
+}  // namespace
+
+MapInput openMapInput(const MapInputOptions& o) {
+  const std::string& p = o.prefix;
+  const int given = !o.camera.empty() + !o.sequence.empty() + !o.simulate.empty();
+  if (given != 1)
+    throw cli::UsageError("give one of " + p + "camera, " + p + "sequence and " + p + "simulate");
+  MapInput in;
+  const std::filesystem::path sequence = o.sequence;
+  if (!o.sensor.empty())
+    in.sensor = SensorConfig::load(o.sensor);
+  else if (!o.sequence.empty() && std::filesystem::exists(sequence / "sensor.yaml"))
+    in.sensor = SensorConfig::load((sequence / "sensor.yaml").string());
+  if (!o.calibration.empty()) in.reference = Reference::load(o.calibration);
+  if (!o.simulate.empty()) return openSimulator(o, std::move(in));
+  if (o.calibration.empty())
+    throw cli::UsageError(p + "calibration FILE is needed (the reference of multislit calibrate)");
+  if (!o.camera.empty()) {
+    AravisConfig config;
+    config.camera = o.camera;
+    config.frame_rate = o.fps;
+    config.roi_width = in.reference.image_width;
+    config.roi_height = in.reference.image_height;
+    config.camera_id = in.reference.camera_id;  // the camera the calibration was taken with
+    in.source = std::make_unique<AravisSource>(config);
+  } else {
+    ImageSequenceConfig config;
+    config.folder = sequence.string();
+    if (o.paced) config.fps = o.fps;
+    in.source = std::make_unique<ImageSequenceSource>(config);
+  }
+  in.description = in.source->name();
+  return in;
+}
+
+MapPoses::MapPoses(const MapPoseOptions& options, const std::string& sequence, const MapInput& in,
+                   const PipelineConfig& pipeline)
+    : gait_(GaitConfig{}, pipeline.foot, pipeline.sensor.mount) {
+  std::string choice = options.choice;
+  const std::filesystem::path recorded = std::filesystem::path(sequence) / "odometry.csv";
+  if (choice.empty())
+    choice = !sequence.empty() && std::filesystem::exists(recorded) ? recorded.string()
+             : in.scenario                                          ? "scenario"
+                                                                    : "still";
+  if (choice == "scenario" && !in.scenario)
+    throw cli::UsageError(options.prefix + "poses scenario needs " + options.prefix + "simulate");
+  mode_ = choice == "still" || choice == "gait" || choice == "scenario" ? choice : "file";
+  if (mode_ == "file") {
+    if (!(options.max_gap >= 1e-6 && options.max_gap <= 3600))
+      throw cli::UsageError(options.prefix + "max-gap must be in [1e-06, 3600]");
+    odometry_.emplace(Odometry::load(choice, static_cast<std::uint64_t>(options.max_gap * 1e6)));
+  }
+  scenario_ = in.scenario;
+  description_ = mode_ == "file" ? "odometry " + choice : mode_;
+}
+
+std::optional<PipelineInput> MapPoses::at(const Frame& frame, PoseMiss& miss) const {
+  PipelineInput in;
+  miss = PoseMiss::None;
+  if (mode_ == "file") {
+    const auto pose = odometry_->at(frame.stamp_us, &miss);
+    if (!pose) return std::nullopt;
+    in.world_from_robot = *pose;
+  } else if (mode_ == "scenario") {
+    in.world_from_robot = scenario_->worldFromRobot(frame.seq);
+  } else if (mode_ == "gait") {
+    in.world_from_robot = gait_.worldFromRobot();
+    in.next_foot = gait_.nextFoot();
+  }
+  return in;
+}
+
+void MapPoses::follow(const WalkerResult& decision) {
+  if (mode_ == "gait") gait_.advance(decision.command, decision.turn_direction);
+}
+
+}  // namespace multislit::apps
