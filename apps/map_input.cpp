@@ -73,7 +73,7 @@ MapPoses::MapPoses(const MapPoseOptions& options, const std::string& sequence, c
   mode_ = choice == "still" || choice == "gait" || choice == "scenario" ? choice : "file";
   if (mode_ == "file") {
     if (!(options.max_gap >= 1e-6 && options.max_gap <= 3600))
-      throw cli::UsageError(options.prefix + "max-gap must be in [1e-06, 3600]");
+      throw cli::UsageError(options.prefix + options.max_gap_name + " must be in [1e-06, 3600]");
     odometry_.emplace(Odometry::load(choice, static_cast<std::uint64_t>(options.max_gap * 1e6)));
   }
   scenario_ = in.scenario;

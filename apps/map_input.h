@@ -52,6 +52,7 @@ struct MapPoseOptions {
   std::string choice;
   double max_gap = 0.5;  ///< odometry samples farther apart are not interpolated [s]
   std::string prefix = "--";
+  std::string max_gap_name = "max-gap";  ///< how messages name max_gap (after the prefix)
 };
 
 /// The robot's pose for each frame: odometry, standing still, the scenario's motion or the gait.

@@ -67,6 +67,7 @@ void NodeConfig::validate() const {
 NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   NodeConfig c;
   c.input.prefix = c.poses.prefix = "~";
+  c.poses.max_gap_name = "max_gap";
   read(nh, "camera", c.input.camera, "a string");
   read(nh, "sequence", c.input.sequence, "a string");
   read(nh, "simulate", c.input.simulate, "a string");
