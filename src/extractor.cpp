@@ -1,11 +1,28 @@
 #include "multislit/extractor.h"
 
+#include "stripe_across.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 namespace multislit {
+
+namespace {
+
+/// du/dv of a reference slit at row k: the central difference over up to two rows each side
+/// where it has points (the reference's centres are smoothed along the slit). 0: none.
+double slopeAt(const std::vector<float>& u, std::size_t k) {
+  std::size_t lo = k, hi = k;
+  for (std::size_t step = 1; step <= 2; ++step) {
+    if (k >= step && std::isfinite(u[k - step])) lo = k - step;
+    if (k + step < u.size() && std::isfinite(u[k + step])) hi = k + step;
+  }
+  return hi > lo ? (u[hi] - u[lo]) / static_cast<double>(hi - lo) : 0.0;
+}
+
+}  // namespace
 
 void ExtractorConfig::validate() const {
   auto require = [](bool ok, const char* field, const char* rule) {
@@ -47,6 +64,7 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
       t.cell = static_cast<std::uint32_t>(s * width + k);
       t.u = p.u;
       t.u_inf = has_inf && std::isfinite(slit.u_inf[k]) ? slit.u_inf[k] : nan;
+      t.slope = static_cast<float>(slopeAt(slit.u, k));
       tasks_.push_back(t);
     }
   }
@@ -61,6 +79,40 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
   const MetricScale& scale = reference_.scale;
   const double inverse_f = 1.0 / scale.f;
   PointRDM* points = cloud.points.data();
+  AcrossStripe across;  // the row's tests, applied to the columns' profiles
+  across.min_contrast = params.min_contrast;
+  across.fit_threshold = params.fit_threshold;
+  across.max_move = params.half_window;
+  struct Found {
+    const Task* task;
+    double centre;  // on the row [px]
+  };
+  std::vector<Found> pending;
+  pending.reserve(tasks_.size());
+  std::size_t waiting = 0;  // pending[waiting] is the first not finished yet
+  const int kLag = 2 + static_cast<int>(std::ceil(params.half_window));  // rows [px]
+  auto finish = [&](const Found& f) {
+    const Task& t = *f.task;
+    double centre = f.centre;
+    if (config_.across_stripe) {
+      // The rows a column's profile needs: the row's window seen along the column.
+      const double slope = std::max(1.0, std::abs(static_cast<double>(t.slope)));
+      across.half_rows = 1 + static_cast<int>(std::ceil(params.half_window / slope));
+      acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
+    }
+    PointRDM& p = points[t.cell];
+    p.dk = static_cast<float>(centre - t.u);
+    if (std::isfinite(t.u_inf)) {
+      const double depth = scale.disparity_constant / (centre - t.u_inf);
+      if (depth > 0) {
+        const double depth_per_px = depth * inverse_f;  // one division per point, not three
+        p.x = static_cast<float>((centre - scale.cx) * depth_per_px);
+        p.y = static_cast<float>((t.row - scale.cy) * depth_per_px);
+        p.z = static_cast<float>(depth);
+      }
+    }
+    ++stats.valid;
+  };
   constexpr std::size_t kBatch = 8;  // regions measured per call
   PeakRegion<T> regions[kBatch];
   Peak peaks[kBatch];
@@ -84,26 +136,16 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
         __builtin_prefetch(row + std::min(byte, last));
     }
     measurePeaks(regions, n, image.cols, params, peaks, found);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!found[i]) continue;
-      const Task& t = tasks[i];
-      const double centre = peaks[i].centre;
-      PointRDM& p = points[t.cell];
-      p.dk = static_cast<float>(centre - t.u);
-      if (std::isfinite(t.u_inf)) {
-        const double depth = scale.disparity_constant / (centre - t.u_inf);
-        if (depth > 0) {
-          const double depth_per_px = depth * inverse_f;  // one division per point, not three
-          p.x = static_cast<float>((centre - scale.cx) * depth_per_px);
-          p.y = static_cast<float>((t.row - scale.cy) * depth_per_px);
-          p.z = static_cast<float>(depth);
-        }
-      }
-      ++stats.valid;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (found[i]) pending.push_back({tasks + i, peaks[i].centre});
+    // Across the stripe, a point needs the rows below its own: it waits until the row search has
+    // passed them, which brought them into the cache.
+    const int passed = tasks[n - 1].row - kLag;
+    while (waiting < pending.size() &&
+           (begin + n == tasks_.size() || pending[waiting].task->row <= passed))
+      finish(pending[waiting++]);
   }
 }
-
 ProfileParams Extractor::profileParams(int depth) const {
   const double full = config_.full_scale > 0      ? config_.full_scale
                       : reference_.full_scale > 0 ? reference_.full_scale

@@ -3,6 +3,7 @@
 #include "full_scale.h"
 #include "slit_course.h"
 #include "slit_selection.h"
+#include "stripe_across.h"
 
 #include <Eigen/Dense>
 #include <opencv2/core.hpp>
@@ -113,39 +114,66 @@ std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int 
   return done;
 }
 
-// 5. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve.
+// 5. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve. A piece of something
+// else joined to a slit's end (a neighbour's end, a bright grain) must not pull the curve: the
+// first fit is a parabola through the middle half of the rows only, and each later fit takes the
+// centres near the one before, its limit from the median residual (robust), not the mean square.
 Eigen::VectorXd fitSlit(const std::vector<Centre>& pts, int degree, double mid, double half,
                         std::vector<bool>* inlier) {
   const int n = static_cast<int>(pts.size());
-  inlier->assign(pts.size(), true);
+  constexpr std::size_t kFewest = 16;  // a shorter track starts from all of its centres
+  inlier->assign(pts.size(), pts.size() < kFewest);
+  for (std::size_t k = pts.size() / 4; k < pts.size() - pts.size() / 4; ++k) (*inlier)[k] = true;
   Eigen::VectorXd coef = Eigen::VectorXd::Zero(degree + 1);
   std::vector<double> res(pts.size());
-  for (int pass = 0; pass < 4; ++pass) {
-    Eigen::MatrixXd a(n, degree + 1);
+  constexpr int kPasses = 6;
+  for (int pass = 0; pass < kPasses; ++pass) {
+    const int d_max = pass == 0 ? std::min(degree, 2) : degree;
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, degree + 1);
     Eigen::VectorXd b(n);
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const double s = (pts[k].row - mid) / half;
       const double w = (*inlier)[k] ? 1.0 : 0.0;
       double p = 1;
-      for (int d = 0; d <= degree; ++d, p *= s) a(i, d) = w * p;
+      for (int d = 0; d <= d_max; ++d, p *= s) a(i, d) = w * p;
       b(i) = w * pts[k].u;
     }
     coef = a.colPivHouseholderQr().solve(b);
-    double ss = 0;
-    int m = 0;
+    std::vector<double> kept;
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const double s = (pts[k].row - mid) / half;
       double p = 1, u = 0;
       for (int d = 0; d <= degree; ++d, p *= s) u += coef(d) * p;
       res[k] = pts[k].u - u;
-      if ((*inlier)[k]) ss += res[k] * res[k], ++m;
+      if ((*inlier)[k]) kept.push_back(std::abs(res[k]));
     }
-    const double limit = std::max(0.3, 3.0 * std::sqrt(ss / std::max(m, 1)));
+    const double sigma = kept.empty() ? 0.0 : 1.4826 * upperMedian(kept);
+    // After the parabola, a generous limit: the full curve is not fitted yet.
+    const double limit = pass == 0 ? std::max(3.0, 6.0 * sigma) : std::max(0.3, 3.0 * sigma);
     for (std::size_t k = 0; k < pts.size(); ++k) (*inlier)[k] = std::abs(res[k]) <= limit;
   }
   return coef;
+}
+
+/// A track's centres measured across the stripe (stripe_across.h), as the extractor measures a
+/// frame's, along the track's own course over kReach centres each side.
+void measureAcross(const cv::Mat& image, double width, Track* t) {
+  constexpr std::size_t kReach = 4;
+  const std::vector<Centre> along_rows = t->points;
+  const std::size_t n = along_rows.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t lo = i >= kReach ? i - kReach : 0, hi = std::min(n - 1, i + kReach);
+    if (along_rows[i].width <= 0 || along_rows[hi].row == along_rows[lo].row) continue;
+    const double slope =
+        (along_rows[hi].u - along_rows[lo].u) / (along_rows[hi].row - along_rows[lo].row);
+    AcrossStripe p;
+    p.min_contrast = 0;
+    p.max_move = std::max(1.0, 0.25 * width);
+    p.half_rows = 1 + static_cast<int>(std::ceil(1.25 * width / std::max(1.0, std::abs(slope))));
+    acrossStripeCentre(image, along_rows[i].row, along_rows[i].u, slope, p, &t->points[i].u);
+  }
 }
 
 /// Each centre measured again in the raw image, where smoothing neither widens a profile cut by
@@ -176,6 +204,7 @@ void measureRaw(const cv::Mat& image, double width, Estimator estimator,
       c.width = ok ? peak.width : 0.0;
       if (ok) c.u = peak.centre;
     }
+  for (Track& t : *tracks) measureAcross(image, width, &t);
 }
 
 /// A track as a reference slit: raw centres, or the smoothed curve over the rows where the slit

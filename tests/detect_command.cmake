@@ -102,7 +102,7 @@ foreach(k 0 1)
   string(JSON threshold GET "${line}" threshold_px)
   expect("frame ${k}: sigma ${sigma}, threshold ${threshold} px, expected 0.3 and 0.9"
          sigma EQUAL 0.3 AND threshold EQUAL 0.9)
-  expect("frame ${k}: sigma estimate ${estimate} px" estimate GREATER 0.08 AND estimate LESS 0.2)
+  expect("frame ${k}: sigma estimate ${estimate} px" estimate GREATER 0.04 AND estimate LESS 0.15)
   set(count_${k} ${count})
   set(groups_${k} ${group_count})
 endforeach()

@@ -64,7 +64,7 @@ TEST(RDMapSynthesizer, MatchesTheExtractorOnRenderedFrames) {
     ASSERT_EQ(extracted->width, synthesized->width);
     ASSERT_EQ(extracted->height, synthesized->height);
     const Comparison c = compare(*extracted, *synthesized);
-    // The same points are measured; dk differs by two independent noises of ~0.12 px.
+    // The same points are measured; dk differs by two independent noises of ~0.08 px.
     EXPECT_GE(static_cast<double>(c.both), 0.99 * static_cast<double>(c.extracted)) << name;
     EXPECT_GE(static_cast<double>(c.both), 0.99 * static_cast<double>(c.synthesized)) << name;
     EXPECT_LT(c.dk_rms, 0.25) << name;

@@ -56,10 +56,28 @@ struct Tally {
   std::size_t high = 0, found = 0;          // crossings >= 5 mm on an object; found as obstacle
   std::size_t valid = 0, false_points = 0;  // our valid points; obstacle points off the object
   std::size_t paper_valid = 0, paper_false = 0;
+  bool paper_floor = true;       // the paper's RANSAC found a floor (else it calls no obstacle)
   std::size_t false_groups = 0;  // obstacles on an empty floor
   double sigma = 0;
   std::string reference_error;  // why the reference could not be built
+  std::size_t frames = 1;
+
+  void add(const Tally& t) {
+    clear += t.clear, measured += t.measured, high += t.high, found += t.found;
+    valid += t.valid, false_points += t.false_points;
+    paper_valid += t.paper_valid, paper_false += t.paper_false, frames += t.frames;
+  }
 };
+
+// One row of the README's table: the frames whose sigma lies in `name`'s range.
+void printRow(const char* name, const Tally& s) {
+  std::printf("| %s | %zu | %.4f | %.3f (%zu/%zu) | %.2f %% | %zu / %zu | %.2f %% |\n", name,
+              s.frames, static_cast<double>(s.measured) / static_cast<double>(s.clear),
+              static_cast<double>(s.found) / static_cast<double>(s.high), s.found, s.high,
+              100.0 * static_cast<double>(s.false_points) / static_cast<double>(s.valid), s.valid,
+              s.paper_valid,
+              100.0 * static_cast<double>(s.paper_false) / static_cast<double>(s.paper_valid));
+}
 
 // Whether the stripe of crossing `t` clears the contrast limit in `image`: its brightest pixel
 // within 2 px of the true centre stands kMinContrast above the darkest of its assigned region.
@@ -104,6 +122,7 @@ void judgePaper(const Reference& ref, const cv::Mat& image,
   paper.local_refit = false;
   const FloorResult floor = FloorDetector(paper).detect(cloud);
   tally->paper_valid += cloud->size();
+  tally->paper_floor = floor.found;
   for (const int i : floor.obstacles) {
     const PointRDM& p = (*cloud)[static_cast<std::size_t>(i)];
     tally->paper_false += !nearObject(truth, p.slit, static_cast<int>(p.v));
@@ -176,20 +195,21 @@ Tally runVariant(int index, Kind kind, int realization) {
 //
 // What holds today is asserted; the targets that do not (recall of >= 5 mm crossings
 // 0.98 and false points 0.1 % over every photometry) are printed and left to the README's table.
-// FloorDetector's windows along the slits (step 6) find the low cable that the 3 px threshold of a
-// 1 px frame hides: recall 0.749 -> 0.851 over the 40 (0.489 -> 0.739 at sigma 0.7 - 1, the 15
-// quiet variants unchanged at 0.962), false points 4.28 % -> 4.45 % of valid (the paper's method
-// 16.6 %); a noise run must lie on one side of the floor (ObstacleClustererConfig::run_one_side),
-// which takes 0.08 % of the false points and 4 of the 26 groups on the 10 empty floors, without a
-// crossing lost. Of the 136 crossings still missed, 94 were not measured at all (a dark, wide
-// stripe on the object); most of the rest lie on tiles under strong speckle (variant 6). The false
-// points are the floor's own shifts: under strong speckle the frame's noise exceeds the 1 px bound
-// (variants 0 and 25 measure 3 px), and on tiles or grainy wood a slit lying along a dark grout
-// line or grain is shifted over dozens of rows, which no rule on geometry alone tells from an
-// object.
+// The slit's centre is measured across the stripe (ExtractorConfig::across_stripe), not along
+// the row, which the rotated camera lays nearly along it: a tile's edge or grout crossing the
+// stripe no longer moves the centre by pixels, and the reference's slits are fitted robustly (a
+// piece of something else at a slit's end pulled whole slits by up to 68 px). With both, the
+// false points over the 40 fell from 4.22 % to 1.75 % of valid (the paper's method 17.5 %) and
+// the frames that measure the paper's sigma (<= 0.35 px) grew from 30 to about 55 of the 80, for
+// the recall 0.808 -> 0.828. What is left: the cable where its stripe is dimmer than the contrast
+// limit (a dark cable under a weak laser: not measured at all), strong speckle (sigma at its 1 px
+// bound), and grout lines or grain running along a stripe, which darken one flank of it over
+// dozens of rows as an object would shift it.
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   const int variants = frameCount(40, 8), realizations = frameCount(2, 1);
   Tally all, quiet;  // quiet: the frames whose sigma is the paper's 0.3 px or near it
+  Tally middle, noisy;
+  all.frames = quiet.frames = middle.frames = noisy.frames = 0;
   for (int n = 0; n < variants * realizations; ++n) {
     const int i = n % variants, realization = n / variants;
     const Kind kind = static_cast<Kind>(i % 4);
@@ -198,18 +218,23 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     if (!t.reference_error.empty()) continue;
     std::printf(
         "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu | false %zu of %zu | paper: valid "
-        "%zu false %zu\n",
+        "%zu false %zu%s\n",
         i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.false_points, t.valid,
-        t.paper_valid, t.paper_false);
+        t.paper_valid, t.paper_false, t.paper_floor ? "" : " (no floor found)");
     EXPECT_GE(t.measured * 100, t.clear * 93) << "variant " << i;
     EXPECT_GE(t.valid * 100, t.paper_valid * 92) << "variant " << i;
-    for (Tally* sum : {&all, t.sigma <= 0.35 ? &quiet : nullptr}) {
-      if (!sum) continue;
-      sum->clear += t.clear, sum->measured += t.measured, sum->high += t.high;
-      sum->found += t.found, sum->valid += t.valid, sum->false_points += t.false_points;
-      sum->paper_valid += t.paper_valid, sum->paper_false += t.paper_false;
+    // Fewer false points than the paper's method wherever it finds a floor (where it finds none,
+    // variants 0 and 25 under strong speckle, it calls no obstacle at all); 400 draws, none more.
+    if (t.paper_floor) {
+      EXPECT_LE(t.false_points, t.paper_false) << "variant " << i;
     }
+    all.add(t);
+    (t.sigma <= 0.35 ? quiet : t.sigma <= 0.7 ? middle : noisy).add(t);
   }
+  printRow("0.30-0.35 px (the paper's sensor)", quiet);
+  printRow("0.35-0.7 px", middle);
+  printRow("0.7-1.0 px (strong speckle, defocus)", noisy);
+  printRow("all", all);
   for (const Tally* sum : {&all, &quiet})
     std::printf(
         "%s: measured %.4f of the crossings that clear the contrast limit, recall of >= 5 mm "
@@ -222,18 +247,15 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
         100.0 * static_cast<double>(sum->paper_false) / static_cast<double>(sum->paper_valid));
   EXPECT_GE(all.measured * 100, all.clear * 99);
   EXPECT_GE(all.valid * 100, all.paper_valid * 98);
-  EXPECT_LE(all.false_points * 3, all.paper_false);  // a third of the paper's false points or less
-  // The bounds hold for any noise: measured over 5 pairs of realizations (Release) or 8 single
-  // ones (the first 8 variants, as the sanitizers run them) at mean - 3 standard deviations. One
-  // reference image per variant and realization weighs on every frame, so one draw was no guide:
-  // 0.851 over all 40 and 0.962 over the quiet ones were single draws of the renderer before (its
-  // five frame draws with that one reference: 0.836 - 0.854); twelve draws of today's give
-  // 0.807 - 0.853. Pairs: recall 0.820 +- 0.007 over all, 0.948 +- 0.005 over the quiet ones,
-  // false points 4.43 +- 0.17 % of valid; the first 8: recall 0.804 +- 0.02, quiet 0.905 - 0.968.
-  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 88 : 93));
-  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 74 : 79));
-  if (!kSanitized) {
-    EXPECT_LE(all.false_points * 1000, all.valid * 50);
-  }
-  EXPECT_LE(quiet.false_points * 100, quiet.valid * 3);
+  EXPECT_LE(all.false_points * 6, all.paper_false);  // a sixth of the paper's false points or less
+  // The bounds hold for any noise: measured over 10 realizations (all 40 variants, and the first
+  // 8, as the sanitizers run them) at mean - 3 standard deviations of a pair (Release) or of one
+  // (the sanitizers). One reference image per variant and realization weighs on every frame, so
+  // one draw is no guide. Single draws: recall 0.831 +- 0.013 over all 40 (0.80 - 0.85), 0.858 +-
+  // 0.014 over the quiet frames, false points 1.80 +- 0.07 % of valid (quiet 1.48 +- 0.11 %); the
+  // first 8: recall 0.811 +- 0.023, quiet 0.902 +- 0.025, false points 1.74 +- 0.17 %.
+  EXPECT_GE(quiet.found * 100, quiet.high * 82);
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 74 : 80));
+  EXPECT_LE(all.false_points * 1000, all.valid * (kSanitized ? 25 : 20));
+  EXPECT_LE(quiet.false_points * 100, quiet.valid * 2);
 }

@@ -22,6 +22,11 @@ struct ExtractorConfig {
   /// stripe may be half as wide as on the floor, and it is still the slit [px].
   double min_width = 1.5;
   int max_saturated = 16;  ///< longest saturated run still measured [px]
+  /// Where the slit crosses a row nearly along it (the rotated camera's 20 deg), measure its
+  /// centre across the stripe, from a few columns' profiles, rather than along the row: the
+  /// row's centre is pulled along the stripe by any change of the floor's brightness there (tile
+  /// edges, grout, grain). The row's profile still finds the slit and decides its validity.
+  bool across_stripe = true;
   /// The image's white [DN]; 0: the reference's (calibrate --full-scale), else 255 for 8-bit
   /// and 65535 for 16-bit images.
   double full_scale = 0.0;
@@ -63,6 +68,7 @@ class Extractor {
     std::uint32_t cell = 0;   ///< index of the point in the cloud
     float u = 0;              ///< reference column [px]
     float u_inf = 0;          ///< column of the ray at infinite depth [px]; NaN: no metric scale
+    float slope = 0;          ///< the reference slit's du/dv here [-]
   };
 
   template <typename T>

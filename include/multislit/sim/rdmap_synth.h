@@ -19,10 +19,10 @@
 namespace multislit {
 
 struct RDMapSynthesizerConfig {
-  /// Gaussian noise of the measured slit centre. 0.12 px is what the Extractor shows on rendered
+  /// Gaussian noise of the measured slit centre. 0.08 px is what the Extractor shows on rendered
   /// images of the default sensor (floor residual std of detection_test); the paper's sensor has
   /// 0.3 px (Sec. IV).
-  double noise_sigma = 0.12;  ///< [px]
+  double noise_sigma = 0.08;  ///< [px]
   double dropout = 0.0;       ///< share of points lost at random (speckle, dark texture) [-]
   std::uint64_t seed = 1;     ///< the same seed and frame give the same cloud
   std::string frame_id = "multislit_camera";  ///< header.frame_id, as ExtractorConfig::frame_id
