@@ -199,9 +199,9 @@ Tally runVariant(int index, Kind kind, int realization) {
 // the row, which the rotated camera lays nearly along it: a tile's edge or grout crossing the
 // stripe no longer moves the centre by pixels, and the reference's slits are fitted robustly (a
 // piece of something else at a slit's end pulled whole slits by up to 68 px). With both, the
-// false points over the 40 fell from 4.22 % to 1.75 % of valid (the paper's method 17.5 %) and
-// the frames that measure the paper's sigma (<= 0.35 px) grew from 30 to about 55 of the 80, for
-// the recall 0.808 -> 0.828. What is left: the cable where its stripe is dimmer than the contrast
+// false points over the 40 fell from 4.22 % to 1.77 % of valid (the paper's method 17.4 %) and
+// the frames that measure the paper's sigma (<= 0.35 px) grew from 30 to 58 of the 80, for the
+// recall 0.808 -> 0.819. What is left: the cable where its stripe is dimmer than the contrast
 // limit (a dark cable under a weak laser: not measured at all), strong speckle (sigma at its 1 px
 // bound), and grout lines or grain running along a stripe, which darken one flank of it over
 // dozens of rows as an object would shift it.
@@ -224,7 +224,8 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     EXPECT_GE(t.measured * 100, t.clear * 93) << "variant " << i;
     EXPECT_GE(t.valid * 100, t.paper_valid * 92) << "variant " << i;
     // Fewer false points than the paper's method wherever it finds a floor (where it finds none,
-    // variants 0 and 25 under strong speckle, it calls no obstacle at all); 400 draws, none more.
+    // variants 0, 1 and 25 under strong speckle, it calls no obstacle at all); of 400 draws, no
+    // other variant had more.
     if (t.paper_floor) {
       EXPECT_LE(t.false_points, t.paper_false) << "variant " << i;
     }
@@ -251,11 +252,11 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   // The bounds hold for any noise: measured over 10 realizations (all 40 variants, and the first
   // 8, as the sanitizers run them) at mean - 3 standard deviations of a pair (Release) or of one
   // (the sanitizers). One reference image per variant and realization weighs on every frame, so
-  // one draw is no guide. Single draws: recall 0.831 +- 0.013 over all 40 (0.80 - 0.85), 0.858 +-
-  // 0.014 over the quiet frames, false points 1.80 +- 0.07 % of valid (quiet 1.48 +- 0.11 %); the
-  // first 8: recall 0.811 +- 0.023, quiet 0.902 +- 0.025, false points 1.74 +- 0.17 %.
-  EXPECT_GE(quiet.found * 100, quiet.high * 82);
-  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 74 : 80));
+  // one draw is no guide. Single draws: recall 0.830 +- 0.017 over all 40 (0.80 - 0.85), 0.855 +-
+  // 0.017 over the quiet frames, false points 1.79 +- 0.06 % of valid (quiet 1.49 +- 0.08 %); the
+  // first 8: recall 0.810 +- 0.029, quiet 0.902 +- 0.026, false points 1.71 +- 0.18 %.
+  EXPECT_GE(quiet.found * 100, quiet.high * 81);
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 72 : 79));
   EXPECT_LE(all.false_points * 1000, all.valid * (kSanitized ? 25 : 20));
   EXPECT_LE(quiet.false_points * 100, quiet.valid * 2);
 }
