@@ -73,46 +73,33 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   });
 }
 
+void Extractor::finish(const cv::Mat& image, const Task& t, double centre,
+                       const ProfileParams& params, PointRDM* p) const {
+  if (config_.across_stripe) {
+    AcrossStripe across;  // the row's tests, applied to the columns' profiles
+    across.min_contrast = params.min_contrast;
+    across.fit_threshold = params.fit_threshold;
+    across.max_move = params.half_window;
+    // The rows a column's profile needs: the row's window seen along the column.
+    const double slope = std::max(1.0, std::abs(static_cast<double>(t.slope)));
+    across.half_rows = 1 + static_cast<int>(std::ceil(params.half_window / slope));
+    acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
+  }
+  p->dk = static_cast<float>(centre - t.u);
+  if (!std::isfinite(t.u_inf)) return;
+  const MetricScale& scale = reference_.scale;
+  const double depth = scale.disparity_constant / (centre - t.u_inf);
+  if (!(depth > 0)) return;
+  const double depth_per_px = depth / scale.f;
+  p->x = static_cast<float>((centre - scale.cx) * depth_per_px);
+  p->y = static_cast<float>((t.row - scale.cy) * depth_per_px);
+  p->z = static_cast<float>(depth);
+}
+
 template <typename T>
 void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
-  const MetricScale& scale = reference_.scale;
-  const double inverse_f = 1.0 / scale.f;
   PointRDM* points = cloud.points.data();
-  AcrossStripe across;  // the row's tests, applied to the columns' profiles
-  across.min_contrast = params.min_contrast;
-  across.fit_threshold = params.fit_threshold;
-  across.max_move = params.half_window;
-  struct Found {
-    const Task* task;
-    double centre;  // on the row [px]
-  };
-  std::vector<Found> pending;
-  pending.reserve(tasks_.size());
-  std::size_t waiting = 0;  // pending[waiting] is the first not finished yet
-  const int kLag = 2 + static_cast<int>(std::ceil(params.half_window));  // rows [px]
-  auto finish = [&](const Found& f) {
-    const Task& t = *f.task;
-    double centre = f.centre;
-    if (config_.across_stripe) {
-      // The rows a column's profile needs: the row's window seen along the column.
-      const double slope = std::max(1.0, std::abs(static_cast<double>(t.slope)));
-      across.half_rows = 1 + static_cast<int>(std::ceil(params.half_window / slope));
-      acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
-    }
-    PointRDM& p = points[t.cell];
-    p.dk = static_cast<float>(centre - t.u);
-    if (std::isfinite(t.u_inf)) {
-      const double depth = scale.disparity_constant / (centre - t.u_inf);
-      if (depth > 0) {
-        const double depth_per_px = depth * inverse_f;  // one division per point, not three
-        p.x = static_cast<float>((centre - scale.cx) * depth_per_px);
-        p.y = static_cast<float>((t.row - scale.cy) * depth_per_px);
-        p.z = static_cast<float>(depth);
-      }
-    }
-    ++stats.valid;
-  };
   constexpr std::size_t kBatch = 8;  // regions measured per call
   PeakRegion<T> regions[kBatch];
   Peak peaks[kBatch];
@@ -136,16 +123,14 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
         __builtin_prefetch(row + std::min(byte, last));
     }
     measurePeaks(regions, n, image.cols, params, peaks, found);
-    for (std::size_t i = 0; i < n; ++i)
-      if (found[i]) pending.push_back({tasks + i, peaks[i].centre});
-    // Across the stripe, a point needs the rows below its own: it waits until the row search has
-    // passed them, which brought them into the cache.
-    const int passed = tasks[n - 1].row - kLag;
-    while (waiting < pending.size() &&
-           (begin + n == tasks_.size() || pending[waiting].task->row <= passed))
-      finish(pending[waiting++]);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!found[i]) continue;
+      finish(image, tasks[i], peaks[i].centre, params, &points[tasks[i].cell]);
+      ++stats.valid;
+    }
   }
 }
+
 ProfileParams Extractor::profileParams(int depth) const {
   const double full = config_.full_scale > 0      ? config_.full_scale
                       : reference_.full_scale > 0 ? reference_.full_scale

@@ -71,6 +71,10 @@ class Extractor {
     float slope = 0;          ///< the reference slit's du/dv here [-]
   };
 
+  /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
+  /// (ExtractorConfig::across_stripe), then dk and, with a metric scale, x, y, z.
+  void finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
+              PointRDM* p) const;
   template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
