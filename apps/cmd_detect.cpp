@@ -125,7 +125,7 @@ constexpr const char* kSummary =
 
 void addDetectOptions(cli::ArgParser& args) {
   addReferenceOptions(args);
-  args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
+  addExtractorOptions(args);
   args.option("sigma", "0.3", "sensor noise sigma [px]: RANSAC's threshold is 3 sigma");
   args.flag("fixed-sigma", "use --sigma for every frame instead of measuring each frame's");
   args.option("min-sigma", "0.3", "lower bound of the measured sigma [px]");
@@ -145,8 +145,7 @@ int runDetect(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   if (!args.has("out")) throw cli::UsageError("--out is required");
 
-  ExtractorConfig ec;
-  ec.estimator = parseEstimator(args.str("estimator"));
+  const ExtractorConfig ec = extractorConfigFromArgs(args);
   const Extractor extractor(referenceFromArgs(args), ec);
   const FloorDetector detector(detectorConfig(args));
   const ObstacleClusterer clusterer;  // grid groups, at least 3 points

@@ -48,7 +48,7 @@ int runRdmap(int argc, char** argv) {
       "organized PCD cloud (fields x y z u v dk slit: one row per slit, NaN where nothing was\n"
       "measured) that pcl_viewer and pcl::io::loadPCDFile read.");
   args.option("calibration", "", "calibration file from multislit calibrate (required)");
-  args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
+  addExtractorOptions(args);
   args.option("sensor", "", "sensor YAML whose mount places the sensor on the robot");
   args.flag("robot-frame",
             "x, y, z in the robot frame (x forward, y left, z up) instead of the camera's");
@@ -57,8 +57,7 @@ int runRdmap(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   if (!args.has("calibration")) throw cli::UsageError("--calibration is required");
 
-  ExtractorConfig ec;
-  ec.estimator = parseEstimator(args.str("estimator"));
+  ExtractorConfig ec = extractorConfigFromArgs(args);
   const bool robot = args.has("robot-frame");
   if (robot) ec.frame_id = "multislit_robot";
   const Extractor extractor(Reference::load(args.str("calibration")), ec);

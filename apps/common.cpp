@@ -89,4 +89,20 @@ Estimator parseEstimator(const std::string& name) {
   throw cli::UsageError("--estimator must be gaussian, centroid or windowed, not '" + name + "'");
 }
 
+void addExtractorOptions(cli::ArgParser& args) {
+  args.option("estimator", "gaussian",
+              "sub-pixel estimator of the row's profile: gaussian, centroid or windowed (it sets "
+              "the centre only with --along-row)");
+  args.flag("along-row",
+            "measure the centre along the image row, as the paper does, not across the stripe: "
+            "about ten times faster, and pulled by tile edges and grain");
+}
+
+ExtractorConfig extractorConfigFromArgs(const cli::ArgParser& args) {
+  ExtractorConfig ec;
+  ec.estimator = parseEstimator(args.str("estimator"));
+  ec.across_stripe = !args.has("along-row");
+  return ec;
+}
+
 }  // namespace multislit::apps

@@ -3,6 +3,7 @@
 
 #include "cli.h"
 
+#include "multislit/extractor.h"
 #include "multislit/image_file.h"  // readMonoImage
 #include "multislit/reference.h"
 #include "multislit/slit_profile.h"
@@ -16,6 +17,10 @@ namespace multislit::apps {
 void writeImage(const std::string& path, const cv::Mat& image);
 /// "gaussian", "centroid" or "windowed"; throws cli::UsageError otherwise.
 Estimator parseEstimator(const std::string& name);
+/// Declares --estimator and --along-row, how a command measures a slit's centre in frames.
+void addExtractorOptions(cli::ArgParser& args);
+/// The extractor config of those options.
+ExtractorConfig extractorConfigFromArgs(const cli::ArgParser& args);
 
 /// Declares --calibration, --reference, --sensor and --full-scale, the ways a command gets its
 /// reference.

@@ -123,5 +123,18 @@ expect("fixed sigma: ${sigma}, estimate ${estimate}, threshold ${threshold}"
        sigma EQUAL 0.1 AND estimate STREQUAL NULL AND threshold EQUAL 0.3)
 expect("bare floor at 0.3 px: ${off_plane} off the plane, ${count} kept, ${rejected} rejected"
        off_plane GREATER count AND rejected GREATER 0)
+# 3. --along-row measures the centre along the row, as the paper does: the same floor found,
+# with the row's larger noise (about 0.12 px against 0.07 px across the stripe).
+detect(along --along-row)
+list(GET measured 0 line)
+string(JSON across GET "${line}" sigma_estimate_px)
+list(GET along 0 line)
+list(GET along_raw 0 raw_line)
+check("bare floor along the row" "${line}" "${raw_line}")
+string(JSON along_estimate GET "${line}" sigma_estimate_px)
+expect("--along-row: sigma estimate ${along_estimate} px, across the stripe ${across} px"
+       along_estimate GREATER across AND along_estimate LESS 0.2)
+
+message(STATUS "sigma estimate across the stripe ${across} px, along the row ${along_estimate} px")
 message(STATUS "cable: ${count_1} points in ${groups_1} groups; bare floor at a 0.3 px threshold: "
                "${off_plane} off the plane, ${rejected} groups rejected, ${count} points kept")
