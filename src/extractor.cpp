@@ -80,9 +80,7 @@ void Extractor::finish(const cv::Mat& image, const Task& t, double centre,
     across.min_contrast = params.min_contrast;
     across.fit_threshold = params.fit_threshold;
     across.max_move = params.half_window;
-    // The rows a column's profile needs: the row's window seen along the column.
-    const double slope = std::max(1.0, std::abs(static_cast<double>(t.slope)));
-    across.half_rows = 1 + static_cast<int>(std::ceil(params.half_window / slope));
+    across.half_rows = acrossHalfRows(params.half_window, t.slope);
     acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
   }
   p->dk = static_cast<float>(centre - t.u);

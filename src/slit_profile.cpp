@@ -125,17 +125,10 @@ bool gaussianCentre(const ProfilePass& pass, int top, int first, int last, doubl
   if (pass.used < 3) return false;
   const double* s = pass.s;
   const double* r = pass.r;
-  // Normal equations [s0 s1 s2; s1 s2 s3; s2 s3 s4] (a b c) = r, by Cramer's rule.
-  const double m00 = s[0], m01 = s[1], m02 = s[2], m11 = s[2], m12 = s[3], m22 = s[4];
-  const double det =
-      m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
-  if (std::abs(det) < 1e-12) return false;
-  const double b = (m00 * (r[1] * m22 - m12 * r[2]) - r[0] * (m01 * m22 - m12 * m02) +
-                    m02 * (m01 * r[2] - r[1] * m02)) /
-                   det;
-  const double c = (m00 * (m11 * r[2] - r[1] * m12) - m01 * (m01 * r[2] - r[1] * m02) +
-                    r[0] * (m01 * m12 - m11 * m02)) /
-                   det;
+  const profile::CramerScalar k =
+      profile::solveByCramer(s[0], s[1], s[2], s[3], s[4], r[0], r[1], r[2]);
+  if (std::abs(k.det) < 1e-12) return false;
+  const double b = k.nb / k.det, c = k.nc / k.det;
   if (!(c < 0)) return false;
   const double offset = -b / (2 * c);
   if (!(offset >= first - top && offset <= last - top)) return false;

@@ -72,6 +72,22 @@ double centroid(const T* row, int lo, int hi, const Background& bg, double floor
 /// out in both, and no pixel lies within float rounding of the threshold [DN].
 constexpr double kTieBreak = 1.0 / 1024;
 
+/// Caruana's normal equations [s0 s1 s2; s1 s2 s3; s2 s3 s4] (a b c) = (r0 r1 r2) by Cramer's
+/// rule: b = nb / det, c = nc / det (the row's gaussianCentre() and the columns' fit across a
+/// stripe; solveByCramer() below is the same in four lanes).
+struct CramerScalar {
+  double det, nb, nc;
+};
+
+inline CramerScalar solveByCramer(double s0, double s1, double s2, double s3, double s4, double r0,
+                                  double r1, double r2) {
+  const double m00 = s0, m01 = s1, m02 = s2, m11 = s2, m12 = s3, m22 = s4;
+  return {
+      m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02),
+      m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02),
+      m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)};
+}
+
 /// Index of the first largest of the n > 0 values at p (std::max_element).
 template <typename T>
 int firstMax(const T* p, int n) {

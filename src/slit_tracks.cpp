@@ -171,7 +171,7 @@ void measureAcross(const cv::Mat& image, double width, Track* t) {
     AcrossStripe p;
     p.min_contrast = 0;
     p.max_move = std::max(1.0, 0.25 * width);
-    p.half_rows = 1 + static_cast<int>(std::ceil(1.25 * width / std::max(1.0, std::abs(slope))));
+    p.half_rows = acrossHalfRows(1.25 * width, slope);
     acrossStripeCentre(image, along_rows[i].row, along_rows[i].u, slope, p, &t->points[i].u);
   }
 }

@@ -1,6 +1,7 @@
 #include "stripe_across.h"
 
 #include "avx2_clones.h"
+#include "slit_profile_simd.h"
 
 #include <algorithm>
 #include <cmath>
@@ -83,14 +84,11 @@ MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold
 /// equations by Cramer's rule, in double), or the centroid where it has no maximum near it.
 double columnOffset(const Columns& c, int j) {
   const double centroid = static_cast<double>(c.moment[j]) / c.sum[j];
-  const double s0 = c.w0[j], s1 = c.s1[j], s2 = c.s2[j], s3 = c.s3[j], s4 = c.s4[j];
-  const double t0 = c.t0[j], t1 = c.t1[j], t2 = c.t2[j];
-  const double det = s0 * (s2 * s4 - s3 * s3) - s1 * (s1 * s4 - s2 * s3) + s2 * (s1 * s3 - s2 * s2);
-  if (!(std::abs(det) > 0)) return centroid;
-  const double b = s0 * (t1 * s4 - s3 * t2) - t0 * (s1 * s4 - s2 * s3) + s2 * (s1 * t2 - s2 * t1);
-  const double q = s0 * (s2 * t2 - t1 * s3) - s1 * (s1 * t2 - t1 * s2) + t0 * (s1 * s3 - s2 * s2);
-  if (!(q / det < 0)) return centroid;
-  const double vertex = -b / (2 * q);
+  const profile::CramerScalar k = profile::solveByCramer(c.w0[j], c.s1[j], c.s2[j], c.s3[j],
+                                                         c.s4[j], c.t0[j], c.t1[j], c.t2[j]);
+  if (!(std::abs(k.det) > 0)) return centroid;
+  if (!(k.nc / k.det < 0)) return centroid;
+  const double vertex = -k.nb / (2 * k.nc);
   return std::abs(vertex - centroid) < 2.0 ? vertex : centroid;
 }
 

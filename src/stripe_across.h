@@ -17,6 +17,9 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <algorithm>
+#include <cmath>
+
 namespace multislit {
 
 struct AcrossStripe {
@@ -30,6 +33,12 @@ struct AcrossStripe {
 /// Slopes at least this steep (|du/dv| >= 1: the stripe nearer a row than a column) are measured
 /// across; a steeper column than row is measured on the row.
 constexpr double kAcrossMinSlope = 1.0;
+
+/// AcrossStripe::half_rows for a row profile of `row_half_window` [px] and a stripe of `slope`:
+/// the row's window seen along a column, and one row more.
+inline int acrossHalfRows(double row_half_window, double slope) {
+  return 1 + static_cast<int>(std::ceil(row_half_window / std::max(1.0, std::abs(slope))));
+}
 
 /// The column where the stripe through (`centre`, `row`) of direction `slope` (du/dv) crosses
 /// `row`, measured from the columns' profiles of `image` (CV_8U or CV_16U). False, leaving
