@@ -58,6 +58,9 @@ struct Tally {
   std::size_t paper_valid = 0, paper_false = 0;
   bool paper_floor = true;       // the paper's RANSAC found a floor (else it calls no obstacle)
   std::size_t false_groups = 0;  // obstacles on an empty floor
+  // The >= 5 mm crossings missed: never measured, measured within the threshold of the floor,
+  // off the floor but not in an accepted group.
+  std::size_t miss_unmeasured = 0, miss_within = 0, miss_ungrouped = 0;
   double sigma = 0;
   std::string reference_error;  // why the reference could not be built
   std::size_t frames = 1;
@@ -66,6 +69,8 @@ struct Tally {
     clear += t.clear, measured += t.measured, high += t.high, found += t.found;
     valid += t.valid, false_points += t.false_points;
     paper_valid += t.paper_valid, paper_false += t.paper_false, frames += t.frames;
+    false_groups += t.false_groups, miss_unmeasured += t.miss_unmeasured;
+    miss_within += t.miss_within, miss_ungrouped += t.miss_ungrouped;
   }
 };
 
@@ -164,6 +169,7 @@ Tally runVariant(int index, Kind kind, int realization) {
     obstacle_points.insert(o.indices.begin(), o.indices.end());
 
   tally.sigma = floor.sigma;
+  const std::set<int> off_floor(floor.obstacles.begin(), floor.obstacles.end());
   std::map<std::pair<int, int>, const SlitCrossing*> truth;
   for (const SlitCrossing& t : f.truth) truth[{t.slit, t.row}] = &t;
   for (const SlitCrossing& t : f.truth) {
@@ -174,8 +180,12 @@ Tally runVariant(int index, Kind kind, int realization) {
     const bool measured = std::isfinite((*cloud)[static_cast<std::size_t>(cell)].dk);
     if (clearsContrast(f.image, t, 0.5 * ref.region_width))
       ++tally.clear, tally.measured += measured;
-    if (t.object > 0 && t.height >= kRecallHeight)
-      ++tally.high, tally.found += obstacle_points.count(cell);
+    if (t.object > 0 && t.height >= kRecallHeight) {
+      const bool found = obstacle_points.count(cell) > 0;
+      ++tally.high, tally.found += found;
+      if (!found && !measured) ++tally.miss_unmeasured;
+      if (!found && measured) (off_floor.count(cell) ? tally.miss_ungrouped : tally.miss_within)++;
+    }
   }
   tally.valid = floor.valid_points;
   for (const int i : obstacle_points) {
@@ -201,10 +211,16 @@ Tally runVariant(int index, Kind kind, int realization) {
 // piece of something else at a slit's end pulled whole slits by up to 68 px). With both, the
 // false points over the 40 fell from 4.22 % to 1.77 % of valid (the paper's method 17.4 %) and
 // the frames that measure the paper's sigma (<= 0.35 px) grew from 30 to 58 of the 80, for the
-// recall 0.808 -> 0.819. What is left: the cable where its stripe is dimmer than the contrast
-// limit (a dark cable under a weak laser: not measured at all), strong speckle (sigma at its 1 px
-// bound), and grout lines or grain running along a stripe, which darken one flank of it over
-// dozens of rows as an object would shift it.
+// recall 0.808 -> 0.819. The extractor's contrast limit then went from the paper's 0.06 to 0.03
+// of full scale (a dark cable under a weak laser was not measured at all): recall 0.819 -> 0.891,
+// false points 1.77 -> 1.74 %, valid points 348 964 -> 351 122 (the paper's method 350 969); the
+// laser-off test below holds at 0.03. What is left (per draw of the 40, over 20 draws): 75 of the
+// ~930 >= 5 mm crossings missed on cables (19 never measured, 55 measured within the threshold of
+// the floor), 20 on balls (7 and 14). Where a cable runs nearly along a slit (variants 18 and 38)
+// the sheet's thickness blends its flank with the floor, so the measured shift is a third of the
+// true one; strong speckle (sigma at its 1 px bound) hides the 7 mm cable under the threshold;
+// and grout lines or grain running along a stripe darken one flank of it over dozens of rows as
+// an object would shift it (tiles of variant 36: 8 of the ~18 false groups on empty floors).
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   const int variants = frameCount(40, 8), realizations = frameCount(2, 1);
   Tally all, quiet;  // quiet: the frames whose sigma is the paper's 0.3 px or near it
@@ -217,10 +233,11 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     EXPECT_EQ(t.reference_error, "") << "variant " << i;  // the reference is built on every one
     if (!t.reference_error.empty()) continue;
     std::printf(
-        "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu | false %zu of %zu | paper: valid "
-        "%zu false %zu%s\n",
-        i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.false_points, t.valid,
-        t.paper_valid, t.paper_false, t.paper_floor ? "" : " (no floor found)");
+        "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu (missed: %zu %zu %zu) | false %zu "
+        "of %zu, %zu groups | paper: valid %zu false %zu%s\n",
+        i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
+        t.miss_within, t.miss_ungrouped, t.false_points, t.valid, t.false_groups, t.paper_valid,
+        t.paper_false, t.paper_floor ? "" : " (no floor found)");
     EXPECT_GE(t.measured * 100, t.clear * 93) << "variant " << i;
     EXPECT_GE(t.valid * 100, t.paper_valid * 92) << "variant " << i;
     // Fewer false points than the paper's method wherever it finds a floor (where it finds none,
@@ -252,11 +269,46 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   // The bounds hold for any noise: measured over 10 realizations (all 40 variants, and the first
   // 8, as the sanitizers run them) at mean - 3 standard deviations of a pair (Release) or of one
   // (the sanitizers). One reference image per variant and realization weighs on every frame, so
-  // one draw is no guide. Single draws: recall 0.830 +- 0.017 over all 40 (0.80 - 0.85), 0.855 +-
-  // 0.017 over the quiet frames, false points 1.79 +- 0.06 % of valid (quiet 1.49 +- 0.08 %); the
-  // first 8: recall 0.810 +- 0.029, quiet 0.902 +- 0.026, false points 1.71 +- 0.18 %.
-  EXPECT_GE(quiet.found * 100, quiet.high * 81);
-  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 72 : 79));
+  // one draw is no guide. Pairs: recall 0.897 +- 0.010 over all 40 (0.881 - 0.912), 0.921 +-
+  // 0.011 over the quiet frames, false points 1.75 +- 0.04 % of valid (quiet 1.54 +- 0.04 %); the
+  // first 8, single draws: recall 0.836 +- 0.036, quiet 0.954 +- 0.029, false points 1.60 +- 0.14
+  // %.
+  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 86 : 88));
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 72 : 86));
   EXPECT_LE(all.false_points * 1000, all.valid * (kSanitized ? 25 : 20));
   EXPECT_LE(quiet.false_points * 100, quiet.valid * 2);
+}
+
+// The laser off, over random photometries (textured, glossy, speckled, bright floors, 8 and 16
+// bit), each frame judged with the reference its photometry gives with the laser on. Texture
+// passes the profile tests where no stripe is brighter (on a high-contrast carpet most rows of a
+// region hold a blob as bright and as wide as a stripe), so the cloud is not empty; what must hold
+// is that nothing is made of it: no floor, hence no obstacle and no step decided on it. At the
+// paper's contrast limit (0.06 of full scale) one of the 40 gave a "floor" of 78 of 164 points.
+TEST(Robustness, LaserOffFramesGiveNoFloorAndNoObstacle) {
+  std::size_t offered = 0, valid = 0, floors = 0;
+  for (int i = 0; i < frameCount(40, 8); ++i) {
+    const Photometry photometry = randomPhotometry(static_cast<std::uint64_t>(1000 + i));
+    Scene bare;
+    RenderConfig render = applyPhotometry(photometry, bare);
+    Reference ref;
+    try {
+      ref = Reference::fromImage(Simulator({}, render).renderReference(bare, tableIPose(0)).image);
+    } catch (const std::exception&) {
+      continue;  // the other test asserts that every reference is built
+    }
+    render.laser_peak = 0;
+    const Simulator dark({}, render);
+    const Eigen::Isometry3d pose = dark.geometry().robotFromCamera(tableIPose(i % 7));
+    auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
+    const ExtractionStats stats = Extractor(ref).extract(dark.render(bare, pose, 1).image, *cloud);
+    const FloorResult floor = FloorDetector().detect(cloud);
+    const ObstacleResult groups = ObstacleClusterer().cluster(cloud, floor, pose);
+    offered += stats.reference_points, valid += stats.valid, floors += floor.found;
+    EXPECT_FALSE(floor.found) << photometry.name << ": " << floor.inliers.size() << " of "
+                              << stats.valid << " points";
+    EXPECT_TRUE(groups.obstacles.empty()) << photometry.name;
+  }
+  std::printf("laser off: %zu valid of %zu reference points (texture), %zu floors found\n", valid,
+              offered, floors);
 }
