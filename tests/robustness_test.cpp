@@ -238,8 +238,11 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
         i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
         t.miss_within, t.miss_ungrouped, t.false_points, t.valid, t.false_groups, t.paper_valid,
         t.paper_false, t.paper_floor ? "" : " (no floor found)");
-    EXPECT_GE(t.measured * 100, t.clear * 93) << "variant " << i;
-    EXPECT_GE(t.valid * 100, t.paper_valid * 92) << "variant " << i;
+    // Over 20 draws of the 40: at least 0.991 of the crossings that clear the paper's contrast
+    // limit measured on every variant, and at least 0.983 of the paper's valid points (variant
+    // 31; 238 of the 800 below the paper's count, the others at or above it).
+    EXPECT_GE(t.measured * 100, t.clear * 98) << "variant " << i;
+    EXPECT_GE(t.valid * 100, t.paper_valid * 97) << "variant " << i;
     // Fewer false points than the paper's method wherever it finds a floor (where it finds none,
     // variants 0, 1 and 25 under strong speckle, it calls no obstacle at all); of 400 draws, no
     // other variant had more.
@@ -263,8 +266,8 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
         100.0 * static_cast<double>(sum->false_points) / static_cast<double>(sum->valid),
         sum->paper_valid, sum->valid,
         100.0 * static_cast<double>(sum->paper_false) / static_cast<double>(sum->paper_valid));
-  EXPECT_GE(all.measured * 100, all.clear * 99);
-  EXPECT_GE(all.valid * 100, all.paper_valid * 98);
+  EXPECT_GE(all.measured * 1000, all.clear * 998);     // 0.9995 - 0.9996 over 20 draws
+  EXPECT_GE(all.valid * 1000, all.paper_valid * 995);  // 1.0002 - 1.0007 (pairs)
   EXPECT_LE(all.false_points * 6, all.paper_false);  // a sixth of the paper's false points or less
   // The bounds hold for any noise: measured over 10 realizations (all 40 variants, and the first
   // 8, as the sanitizers run them) at mean - 3 standard deviations of a pair (Release) or of one
