@@ -141,8 +141,11 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   const CentreSamples& centre = *buffers;
   traceCentres(shader, reach, pixel, render_.method, *buffers);
   lap(spent.centres);
-  // 2. Laser light integrated over each pixel near a sheet.
-  cv::Mat laser = integrateLaser(shader, centre, reach, pixel);
+  // 2. Laser light integrated over each pixel near a sheet. With the laser off every pixel has
+  // none; integrateLaser() would sample each near pixel n x n, finding no lit neighbours.
+  cv::Mat laser = render_.laser_peak > 0
+                      ? integrateLaser(shader, centre, reach, pixel)
+                      : cv::Mat(centre.height, centre.width, CV_32F, cv::Scalar(0));
   lap(spent.laser);
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
   if (render_.noise && render_.speckle_contrast > 0)
