@@ -8,10 +8,14 @@
 #include "multislit/sim/simulator.h"
 #include "multislit/sim/walk.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -88,16 +92,62 @@ CameraEmulator::ImageMaker liveWalk(const SensorConfig& sensor, const RenderConf
   return [walk] { return walk->step().image; };
 }
 
+// The images the live walk keeps ready (--ahead), at most what 2 GiB hold.
+std::size_t aheadLimit(const SensorConfig& sensor, int bit_depth) {
+  const double bytes =
+      static_cast<double>(sensor.camera.width) * sensor.camera.height * bit_depth / 8;
+  return static_cast<std::size_t>(std::max(3.0, std::floor(2.0 * (1 << 30) / bytes)));
+}
+
+constexpr std::size_t kTimed = 5;  // images timed by --ahead auto
+
+// --ahead auto: enough images that the demo's walk (kWalkFrames) comes at `fps` without a late
+// one, from the time the first images took to make, half as many again to spare (a client on the
+// same machine slows the making: map --camera, 45 -> 54 ms an image on 2 cores), at most the
+// walk; 3 when the making keeps up.
+std::size_t autoAhead(const CameraEmulator& camera, double fps, std::size_t limit) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::uint64_t first = camera.imagesMade();
+  while (camera.imagesMade() < first + kTimed && camera.lastError().empty() &&
+         !StopSignal::requested())
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const double made_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
+      static_cast<double>(kTimed);
+  const double short_by = std::max(0.0, 1.0 - 1.0 / (fps * made_s));  // per frame sent
+  const auto ahead = static_cast<std::size_t>(
+      std::min(std::ceil(1.5 * kWalkFrames * short_by), static_cast<double>(kWalkFrames)) + 3);
+  std::cout << std::fixed << std::setprecision(1) << "an image takes " << 1e3 * made_s
+            << " ms to make, the camera sends one every " << 1e3 / fps << " ms: " << ahead
+            << " images ahead for the walk's " << kWalkFrames << " frames";
+  std::cout.unsetf(std::ios::floatfield);
+  if (ahead > limit) std::cout << " (only " << limit << " fit in 2 GiB)";
+  std::cout << "\n" << std::flush;
+  return std::min(ahead, limit);
+}
+
+// Waits until `ahead` images are ready, a client streams, the making stops or Ctrl-C.
+void makeAhead(const CameraEmulator& camera, std::size_t ahead) {
+  cli::Progress progress(ahead, "render ahead");
+  while (camera.imagesReady() < ahead && camera.framesServed() == 0 && camera.lastError().empty() &&
+         !StopSignal::requested()) {
+    progress.update(camera.imagesReady());
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  progress.finish();
+  std::cout << camera.imagesReady() << " images ready\n" << std::flush;
+}
+
 // The camera: the demo's walk rendered live (--walk), or a scenario's frames rendered first.
 // `what` receives what it serves.
 std::unique_ptr<CameraEmulator> makeCamera(const cli::ArgParser& args, const SensorConfig& sensor,
                                            const RenderConfig& render, const EmulatorConfig& config,
-                                           long frames, std::string* what) {
+                                           long frames, std::size_t ahead, std::string* what) {
   if (args.has("walk")) {
     *what = "the demo's walk, rendered live,";
     const cv::Size size(sensor.camera.width, sensor.camera.height);
-    return std::make_unique<CameraEmulator>(liveWalk(sensor, render), size,
-                                            render.bit_depth == 8 ? CV_8UC1 : CV_16UC1, config);
+    return std::make_unique<CameraEmulator>(
+        liveWalk(sensor, render), size, render.bit_depth == 8 ? CV_8UC1 : CV_16UC1, config, ahead);
   }
   const Scenario scenario = makeScenario(args.str("scenario"));
   *what = std::to_string(frames) + " frames of scenario " + scenario.name + " in turn";
@@ -105,17 +155,7 @@ std::unique_ptr<CameraEmulator> makeCamera(const cli::ArgParser& args, const Sen
                                           config);
 }
 
-}  // namespace
-
-int runEmulate(int argc, char** argv) {
-  cli::ArgParser args(
-      "emulate",
-      "Serves the simulator's images of a walk as a GigE Vision camera on 127.0.0.1 (Aravis's\n"
-      "fake camera, GVCP port 3956) until interrupted (Ctrl-C) or for --seconds: a scenario's\n"
-      "frames rendered first and served in turn, or with --walk the demo's walk rendered as\n"
-      "the camera sends it. Open the camera by its address, e.g.\n"
-      "multislit_grabber_example --camera 127.0.0.1 --calibration FILE. A client's\n"
-      "AcquisitionFrameRate replaces --fps.");
+void addOptions(cli::ArgParser& args) {
   args.option("scenario", "ball", "named scenario whose walk is filmed");
   args.option("frames", "16", "walk frames rendered beforehand and served in turn");
   args.option("fps", "30", "frame rate until a client sets its own [Hz]");
@@ -130,12 +170,43 @@ int runEmulate(int argc, char** argv) {
             "serve the demo's walk (multislit walk) rendered live as the camera sends, instead "
             "of a scenario's frames rendered first; a frame not rendered in time carries the "
             "last image again and is counted");
+  args.option("ahead", "3",
+              "--walk: images made ahead and kept ready, made while no client streams (the "
+              "command waits for them); auto: enough that the demo's walk of " +
+                  std::to_string(kWalkFrames) +
+                  " frames comes at --fps without a late frame, from the time the first images "
+                  "take");
+}
+
+// --ahead for the live walk: the images to make before serving (auto: measured), made.
+void renderAhead(CameraEmulator& camera, bool automatic, std::size_t ahead, double fps,
+                 std::size_t limit) {
+  if (automatic) {
+    ahead = autoAhead(camera, fps, limit);
+    camera.setImagesAhead(ahead);
+  }
+  if (ahead > 3) makeAhead(camera, ahead);
+}
+
+}  // namespace
+
+int runEmulate(int argc, char** argv) {
+  cli::ArgParser args(
+      "emulate",
+      "Serves the simulator's images of a walk as a GigE Vision camera on 127.0.0.1 (Aravis's\n"
+      "fake camera, GVCP port 3956) until interrupted (Ctrl-C) or for --seconds: a scenario's\n"
+      "frames rendered first and served in turn, or with --walk the demo's walk rendered as\n"
+      "the camera sends it. Open the camera by its address, e.g.\n"
+      "multislit_grabber_example --camera 127.0.0.1 --calibration FILE. A client's\n"
+      "AcquisitionFrameRate replaces --fps.");
+  addOptions(args);
   if (!args.parse(argc, argv)) return 0;
 
   const long frames = args.integer("frames", 1, 100000);
   const double seconds = args.number("seconds", 0, 1e9);
   const EmulatorConfig config = emulatorConfigFromArgs(args);
   const bool live = args.has("walk");
+  const bool auto_ahead = args.str("ahead") == "auto";
 
   RenderConfig render;
   render.seed = static_cast<uint64_t>(args.integer("seed"));
@@ -143,9 +214,16 @@ int runEmulate(int argc, char** argv) {
   render.noise = !args.has("no-noise");
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  const std::size_t limit = aheadLimit(sensor, render.bit_depth);
+  // auto: room for the images it times while no client streams
+  const std::size_t ahead =
+      auto_ahead ? kTimed + 1 : static_cast<std::size_t>(args.integer("ahead", 1, 100000));
+  if (ahead > limit)
+    throw cli::UsageError("--ahead " + std::to_string(ahead) + ": at most " +
+                          std::to_string(limit) + " images of this size fit in 2 GiB");
   std::string what;
   const std::unique_ptr<CameraEmulator> camera =
-      makeCamera(args, sensor, render, config, frames, &what);
+      makeCamera(args, sensor, render, config, frames, ahead, &what);
   const StopSignal stop;  // Ctrl-C and SIGTERM end the serving
   std::cout << "GigE Vision camera " << CameraEmulator::kAddress << " (serial " << config.serial
             << "): " << sensor.camera.width << "x" << sensor.camera.height << " Mono"
@@ -154,6 +232,7 @@ int runEmulate(int argc, char** argv) {
     std::cout << "for " << seconds << " s\n" << std::flush;
   else
     std::cout << "Ctrl-C stops\n" << std::flush;
+  if (live) renderAhead(*camera, auto_ahead, ahead, config.fps, limit);
 
   const auto start = std::chrono::steady_clock::now();
   serve(*camera, start, seconds, live);

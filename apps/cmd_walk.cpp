@@ -21,13 +21,15 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string>
 
 namespace multislit::apps {
 namespace {
 
 void declareOptions(cli::ArgParser& args) {
   args.option("out", "out/walk", "output folder");
-  args.option("frames", "900", "frames to walk (30 Hz; the paper's run is about 900)");
+  args.option("frames", std::to_string(kWalkFrames),
+              "frames to walk (30 Hz; the paper's run is about 900)");
   args.option("seed", "1", "noise seed of the images (or of the synthesized RDMaps)");
   args.option("ball-frame", "200", "frame the ping-pong ball lands in front of the foot");
   args.option("step-length", "0.04", "the body's advance per step [m]");

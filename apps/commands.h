@@ -3,6 +3,9 @@
 
 namespace multislit::apps {
 
+/// The demo's walk: multislit walk's frames (30 Hz; the paper's run is about as long).
+constexpr long kWalkFrames = 900;
+
 int runSimulate(int argc, char** argv);
 int runWalk(int argc, char** argv);
 int runEmulate(int argc, char** argv);

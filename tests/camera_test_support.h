@@ -55,6 +55,20 @@ inline std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& 
   }
 }
 
+/// makeEmulator() of live images (CameraEmulator's ImageMaker), up to `ahead` of them kept ready.
+inline std::unique_ptr<CameraEmulator> makeLiveEmulator(const CameraEmulator::ImageMaker& make,
+                                                        cv::Size size, std::size_t ahead = 3) {
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  for (;;) {
+    try {
+      return std::make_unique<CameraEmulator>(make, size, CV_8UC1, EmulatorConfig{}, ahead);
+    } catch (const std::runtime_error&) {
+      if (Clock::now() > deadline) return nullptr;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  }
+}
+
 }  // namespace multislit::test
 
 #define REQUIRE_EMULATOR(emulator)                                                       \

@@ -215,6 +215,19 @@ TEST(GigEVision, StartStopCycles) {
   EXPECT_EQ(grabber.getStats().source.reconnects, 0u);
 }
 
+// The centre pixel of the next `count` frames of the camera on 127.0.0.1 at 30 Hz (fewer when
+// they stop coming).
+std::vector<int> centreValues(std::size_t count) {
+  const std::shared_ptr<AravisSource> source = gigeSource(30);
+  source->start();
+  std::vector<int> values;
+  for (std::size_t tries = 0; values.size() < count && tries < 10 * count; ++tries)
+    if (const std::optional<Frame> f = source->next(milliseconds(200)))
+      values.push_back(f->image.at<std::uint8_t>(f->image.rows / 2, f->image.cols / 2));
+  source->stop();
+  return values;
+}
+
 // Live images (multislit emulate --walk): made on the emulator's thread while the camera sends,
 // taken in turn; one not made in time is sent as the last one again and counted. Each image here
 // carries its number in its pixels and takes 150 ms to make, 4.5 frames at 30 Hz.
@@ -225,23 +238,9 @@ TEST(GigEVision, LiveImagesComeInTurnAndLateOnesRepeatTheLast) {
     std::this_thread::sleep_for(milliseconds(150));
     return cv::Mat(size, CV_8UC1, cv::Scalar(20 + made++ % 200));
   };
-  std::unique_ptr<CameraEmulator> emulator;
-  const auto deadline = Clock::now() + std::chrono::seconds(30);
-  while (!emulator && Clock::now() < deadline) {
-    try {
-      emulator = std::make_unique<CameraEmulator>(make, size, CV_8UC1);
-    } catch (const std::runtime_error&) {  // the port is taken: wait for the other camera
-      std::this_thread::sleep_for(milliseconds(200));
-    }
-  }
+  const std::unique_ptr<CameraEmulator> emulator = makeLiveEmulator(make, size);
   REQUIRE_EMULATOR(emulator);
-  const std::shared_ptr<AravisSource> source = gigeSource(30);
-  source->start();
-  std::vector<int> values;
-  for (int tries = 0; values.size() < 40 && tries < 400; ++tries)
-    if (const std::optional<Frame> f = source->next(milliseconds(200)))
-      values.push_back(f->image.at<std::uint8_t>(f->image.rows / 2, f->image.cols / 2));
-  source->stop();
+  const std::vector<int> values = centreValues(40);
   ASSERT_EQ(values.size(), 40u);
   int increases = 0;
   for (std::size_t k = 1; k < values.size(); ++k) {
@@ -251,6 +250,29 @@ TEST(GigEVision, LiveImagesComeInTurnAndLateOnesRepeatTheLast) {
   EXPECT_GE(increases, 3);                // new images keep coming
   EXPECT_GT(emulator->framesLate(), 0u);  // and the camera did not wait for them
   EXPECT_GE(emulator->imagesMade(), static_cast<std::uint64_t>(increases));
+  EXPECT_EQ(emulator->lastError(), "");
+}
+
+// multislit emulate --walk --ahead: images slower to make than the camera sends them (40 ms
+// against 33 ms at 30 Hz), made ahead while no client streams. The first 60 frames are 60 new
+// images in turn, none sent late: a client sees the walk at the camera's rate.
+TEST(GigEVision, LiveImagesMadeAheadComeWithoutALateOne) {
+  const cv::Size size = simData().frames[0].size();
+  std::atomic<int> made{0};
+  CameraEmulator::ImageMaker make = [&] {
+    std::this_thread::sleep_for(milliseconds(40));
+    return cv::Mat(size, CV_8UC1, cv::Scalar(made++ % 250));
+  };
+  const std::unique_ptr<CameraEmulator> emulator = makeLiveEmulator(make, size, 90);
+  REQUIRE_EMULATOR(emulator);
+  ASSERT_TRUE(waitFor([&] { return emulator->imagesReady() >= 90; }));
+  EXPECT_EQ(emulator->framesServed(), 0u);  // nothing is sent while no client streams
+  const std::vector<int> values = centreValues(60);
+  ASSERT_EQ(values.size(), 60u);
+  for (std::size_t k = 1; k < values.size(); ++k)  // a frame lost on the way skips one
+    EXPECT_GT(values[k], values[k - 1]) << "frame " << k << ": the last image again";
+  EXPECT_EQ(emulator->framesLate(), 0u);
+  emulator->setImagesAhead(1);  // what is ready stays; no more is made beyond one
   EXPECT_EQ(emulator->lastError(), "");
 }
 

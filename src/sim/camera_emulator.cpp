@@ -95,6 +95,17 @@ class LiveImages {
   }
   std::uint64_t late() const { return late_; }
   std::uint64_t made() const { return made_; }
+  std::size_t ready() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return ready_.size();
+  }
+  void setAhead(std::size_t ahead) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ahead_ = std::max<std::size_t>(1, ahead);
+    }
+    changed_.notify_all();
+  }
   std::string error() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return error_;
@@ -279,6 +290,14 @@ std::uint64_t CameraEmulator::framesLate() const { return impl_->live ? impl_->l
 
 std::uint64_t CameraEmulator::imagesMade() const {
   return impl_->live ? impl_->live->made() + 1 : impl_->images.size();  // + the first
+}
+
+std::size_t CameraEmulator::imagesReady() const {
+  return impl_->live ? impl_->live->ready() : impl_->images.size();
+}
+
+void CameraEmulator::setImagesAhead(std::size_t ahead) {
+  if (impl_->live) impl_->live->setAhead(ahead);
 }
 
 std::string CameraEmulator::lastError() const {

@@ -55,6 +55,11 @@ class CameraEmulator {
   std::uint64_t framesLate() const;
   /// Live: the images made so far, and why the making stopped ("" while it goes on).
   std::uint64_t imagesMade() const;
+  /// Live: the images made and not yet sent (a camera no client streams from sends none, so they
+  /// pile up to `ahead`); else every image.
+  std::size_t imagesReady() const;
+  /// Live: keep up to `ahead` images ready from now on (at least 1); else nothing.
+  void setImagesAhead(std::size_t ahead);
   std::string lastError() const;
   /// 1 makes a camera that answers control requests but sends no image; from the next frame.
   void setLostPacketRatio(double ratio);
