@@ -44,6 +44,16 @@ Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullp
   return c;
 }
 
+/// The median |u - course(row)| of `pts` [px].
+double medianDistance(const std::vector<Centre>& pts, const Course& course) {
+  std::vector<double> d;
+  for (const Centre& c : pts) {
+    const double r = c.row / 100.0;
+    d.push_back(std::abs(c.u - (course.coef(0) + course.coef(1) * r + course.coef(2) * r * r)));
+  }
+  return upperMedian(d);
+}
+
 /// The curvature the projector gives its slits (the pattern's distortion), as the median over
 /// the tracks long enough to show it; 0 when none is.
 double patternCurvature(const std::vector<Track>& tracks) {
@@ -99,7 +109,11 @@ double courseMismatch(const Track& a, const Track& b, double curvature, double* 
   std::vector<Centre> both = end_a;
   both.insert(both.end(), end_b.begin(), end_b.end());
   *scatter = std::max(fitCourse(end_a, &curvature).spread, fitCourse(end_b, &curvature).spread);
-  return fitCourse(both, &curvature).spread;
+  // Each end on the joint course, not the median of both: over a long gap the course that fits
+  // one end can cross the other (a grain ridge above a curved slit) and leave half its points on
+  // it, which the median of all would call a fit.
+  const Course joint = fitCourse(both, &curvature);
+  return std::max(medianDistance(end_a, joint), medianDistance(end_b, joint));
 }
 
 /// b's points below a's end appended to a (a speckled slit followed twice keeps one course).
