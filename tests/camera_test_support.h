@@ -40,14 +40,14 @@ inline bool waitFor(const std::function<bool()>& done, double ms = kDeadlineMs) 
   return done();
 }
 
-/// The emulator binds 127.0.0.1:3956; another test process may hold it for a while: tries for
-/// 30 s, then nullptr (see REQUIRE_EMULATOR).
-inline std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& images,
-                                                    const EmulatorConfig& config = {}) {
+/// The emulator binds 127.0.0.1:3956; another test process may hold it for a while: `make` is
+/// tried for 30 s, then nullptr (see REQUIRE_EMULATOR).
+template <typename Make>
+std::unique_ptr<CameraEmulator> whenPortIsFree(const Make& make) {
   const auto deadline = Clock::now() + std::chrono::seconds(30);
   for (;;) {
     try {
-      return std::make_unique<CameraEmulator>(images, config);
+      return make();
     } catch (const std::runtime_error&) {
       if (Clock::now() > deadline) return nullptr;
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -55,18 +55,18 @@ inline std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& 
   }
 }
 
-/// makeEmulator() of live images (CameraEmulator's ImageMaker), up to `ahead` of them kept ready.
+/// An emulator serving `images` in turn, once the port is free.
+inline std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& images,
+                                                    const EmulatorConfig& config = {}) {
+  return whenPortIsFree([&] { return std::make_unique<CameraEmulator>(images, config); });
+}
+
+/// The same with live images (CameraEmulator's ImageMaker), up to `ahead` of them kept ready.
 inline std::unique_ptr<CameraEmulator> makeLiveEmulator(const CameraEmulator::ImageMaker& make,
                                                         cv::Size size, std::size_t ahead = 3) {
-  const auto deadline = Clock::now() + std::chrono::seconds(30);
-  for (;;) {
-    try {
-      return std::make_unique<CameraEmulator>(make, size, CV_8UC1, EmulatorConfig{}, ahead);
-    } catch (const std::runtime_error&) {
-      if (Clock::now() > deadline) return nullptr;
-      std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    }
-  }
+  return whenPortIsFree([&] {
+    return std::make_unique<CameraEmulator>(make, size, CV_8UC1, EmulatorConfig{}, ahead);
+  });
 }
 
 }  // namespace multislit::test
