@@ -96,7 +96,8 @@ CameraEmulator::ImageMaker liveWalk(const SensorConfig& sensor, const RenderConf
 std::size_t aheadLimit(const SensorConfig& sensor, int bit_depth) {
   const double bytes =
       static_cast<double>(sensor.camera.width) * sensor.camera.height * bit_depth / 8;
-  return static_cast<std::size_t>(std::max(3.0, std::floor(2.0 * (1 << 30) / bytes)));
+  return std::max(CameraEmulator::kDefaultAhead,
+                  static_cast<std::size_t>(std::floor(2.0 * (1 << 30) / bytes)));
 }
 
 constexpr std::size_t kTimed = 5;  // images timed by --ahead auto
@@ -104,7 +105,7 @@ constexpr std::size_t kTimed = 5;  // images timed by --ahead auto
 // --ahead auto: enough images that the demo's walk (kWalkFrames) comes at `fps` without a late
 // one, from the time the first images took to make, half as many again to spare (a client on the
 // same machine slows the making: map --camera, 45 -> 54 ms an image on 2 cores), at most the
-// walk; 3 when the making keeps up.
+// walk; CameraEmulator::kDefaultAhead when the making keeps up.
 std::size_t autoAhead(const CameraEmulator& camera, double fps, std::size_t limit) {
   const auto start = std::chrono::steady_clock::now();
   const std::uint64_t first = camera.imagesMade();
@@ -116,7 +117,8 @@ std::size_t autoAhead(const CameraEmulator& camera, double fps, std::size_t limi
       static_cast<double>(kTimed);
   const double short_by = std::max(0.0, 1.0 - 1.0 / (fps * made_s));  // per frame sent
   const auto ahead = static_cast<std::size_t>(
-      std::min(std::ceil(1.5 * kWalkFrames * short_by), static_cast<double>(kWalkFrames)) + 3);
+      std::min(std::ceil(1.5 * kWalkFrames * short_by), static_cast<double>(kWalkFrames)) +
+      CameraEmulator::kDefaultAhead);
   std::cout << std::fixed << std::setprecision(1) << "an image takes " << 1e3 * made_s
             << " ms to make, the camera sends one every " << 1e3 / fps << " ms: " << ahead
             << " images ahead for the walk's " << kWalkFrames << " frames";
@@ -170,7 +172,7 @@ void addOptions(cli::ArgParser& args) {
             "serve the demo's walk (multislit walk) rendered live as the camera sends, instead "
             "of a scenario's frames rendered first; a frame not rendered in time carries the "
             "last image again and is counted");
-  args.option("ahead", "3",
+  args.option("ahead", std::to_string(CameraEmulator::kDefaultAhead),
               "--walk: images made ahead and kept ready, made while no client streams (the "
               "command waits for them); auto: enough that the demo's walk of " +
                   std::to_string(kWalkFrames) +
@@ -185,7 +187,7 @@ void renderAhead(CameraEmulator& camera, bool automatic, std::size_t ahead, doub
     ahead = autoAhead(camera, fps, limit);
     camera.setImagesAhead(ahead);
   }
-  if (ahead > 3) makeAhead(camera, ahead);
+  if (ahead > CameraEmulator::kDefaultAhead) makeAhead(camera, ahead);
 }
 
 }  // namespace

@@ -62,8 +62,9 @@ inline std::unique_ptr<CameraEmulator> makeEmulator(const std::vector<cv::Mat>& 
 }
 
 /// The same with live images (CameraEmulator's ImageMaker), up to `ahead` of them kept ready.
-inline std::unique_ptr<CameraEmulator> makeLiveEmulator(const CameraEmulator::ImageMaker& make,
-                                                        cv::Size size, std::size_t ahead = 3) {
+inline std::unique_ptr<CameraEmulator> makeLiveEmulator(
+    const CameraEmulator::ImageMaker& make, cv::Size size,
+    std::size_t ahead = CameraEmulator::kDefaultAhead) {
   return whenPortIsFree([&] {
     return std::make_unique<CameraEmulator>(make, size, CV_8UC1, EmulatorConfig{}, ahead);
   });

@@ -28,6 +28,11 @@ struct ReferenceErrors {
   }
 };
 
+void printErrors(const char* what, const ReferenceErrors& e) {
+  std::printf("%s: reference error median %.3f p99 %.3f worst %.2f px over %zu rows\n", what,
+              quantile(e.all, 0.5), quantile(e.all, 0.99), e.worst_slit, e.all.size());
+}
+
 ReferenceErrors errorsOf(const Reference& ref, const std::vector<SlitCrossing>& truth) {
   ReferenceErrors out;
   for (const SlitCrossing& t : truth) {
@@ -70,8 +75,7 @@ TEST(ReferenceBuild, AStrayPieceAtASlitsEndDoesNotBendTheSlit) {
   std::vector<SlitCrossing> truth;
   const Reference ref = Reference::fromImage(floorImages(32, 1, &truth)[0]);
   const ReferenceErrors e = errorsOf(ref, truth);
-  std::printf("variant 32: reference error median %.3f p99 %.3f worst %.2f px over %zu rows\n",
-              quantile(e.all, 0.5), quantile(e.all, 0.99), e.worst_slit, e.all.size());
+  printErrors("variant 32", e);
   EXPECT_GT(e.all.size(), 4000u);
   EXPECT_LT(e.worst_slit, 1.5);
   EXPECT_LT(quantile(e.all, 0.99), 0.5);
@@ -106,8 +110,7 @@ TEST(ReferenceBuild, TheMeanOfFiveImagesOfAGrainedFloorIsNotJoinedToItsGrain) {
   Reference ref;
   ASSERT_NO_THROW(ref = Reference::fromImages(images));
   const ReferenceErrors e = errorsOf(ref, truth);
-  std::printf("variant 32, five images: error median %.3f p99 %.3f worst %.2f px over %zu rows\n",
-              quantile(e.all, 0.5), quantile(e.all, 0.99), e.worst_slit, e.all.size());
+  printErrors("variant 32, five images", e);
   EXPECT_GT(e.all.size(), 4000u);
   EXPECT_LT(e.worst_slit, 1.0);
   EXPECT_LT(quantile(e.all, 0.99), 0.3);

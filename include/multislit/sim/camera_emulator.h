@@ -31,6 +31,8 @@ struct EmulatorConfig {
 class CameraEmulator {
  public:
   static constexpr const char* kAddress = "127.0.0.1";
+  /// Live images kept ready unless told otherwise: enough for a maker that keeps up.
+  static constexpr std::size_t kDefaultAhead = 3;
 
   /// `images`: one or more images of the same size and type (CV_8UC1 or CV_16UC1). Throws
   /// std::invalid_argument for bad images, std::runtime_error when 127.0.0.1:3956 is taken.
@@ -42,7 +44,7 @@ class CameraEmulator {
   /// or, when none is ready in time, the last one again (counted by framesLate()). An image of
   /// another size or type ends the making (lastError()).
   CameraEmulator(ImageMaker make, cv::Size size, int type, const EmulatorConfig& config = {},
-                 std::size_t ahead = 3);
+                 std::size_t ahead = kDefaultAhead);
   ~CameraEmulator();
   CameraEmulator(const CameraEmulator&) = delete;
   CameraEmulator& operator=(const CameraEmulator&) = delete;
