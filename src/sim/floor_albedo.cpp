@@ -39,26 +39,38 @@ MULTISLIT_AVX2_CLONES void addNoiseRow(const double* __restrict x, const double*
 
 }  // namespace
 
-bool FloorAlbedo::Octave::addRow(const double* x, const double* y, double* g, int n) const {
-  if (table.empty() || columns > (1 << 20)) return false;
+FloorAlbedo::RowBox FloorAlbedo::boxOf(const double* x, const double* y, int n) {
+  RowBox box;
+  if (n <= 0) return box;
+  box.lo_x = box.hi_x = x[0], box.lo_y = box.hi_y = y[0];
+  for (int i = 0; i < n; ++i) {
+    box.finite &= std::isfinite(x[i]) && std::isfinite(y[i]);
+    box.lo_x = std::min(box.lo_x, x[i]), box.hi_x = std::max(box.hi_x, x[i]);
+    box.lo_y = std::min(box.lo_y, y[i]), box.hi_y = std::max(box.hi_y, y[i]);
+  }
+  return box;
+}
+
+bool FloorAlbedo::Octave::addRow(const double* x, const double* y, const RowBox& box, double* g,
+                                 int n) const {
+  if (table.empty() || columns > (1 << 20) || !box.finite) return false;
   const double x_hi = static_cast<double>(columns - 1), y_hi = static_cast<double>(rows - 1);
   const double ox = static_cast<double>(x0), oy = static_cast<double>(y0);
-  int outside = 0;  // points off the table, NaN included: a loop the compiler vectorizes
-  for (int i = 0; i < n; ++i) {
-    const double xs = x[i] * scale_x - ox, ys = y[i] * scale_y - oy;
-    outside += !((xs >= 0) & (xs < x_hi) & (ys >= 0) & (ys < y_hi));
-  }
-  if (outside > 0) return false;
+  // A cell of margin: a box made of a row's ends may miss a point by rounding.
+  const double lo_x = box.lo_x * scale_x - ox, hi_x = box.hi_x * scale_x - ox;
+  const double lo_y = box.lo_y * scale_y - oy, hi_y = box.hi_y * scale_y - oy;
+  if (!(lo_x >= 1 && hi_x < x_hi - 1 && lo_y >= 1 && hi_y < y_hi - 1)) return false;
   addNoiseRow(x, y, g, n, table.data(), static_cast<int>(columns), scale_x, scale_y, ox, oy,
               weight);
   return true;
 }
 
-void FloorAlbedo::row(const double* x, const double* y, double* out, int n) const {
+void FloorAlbedo::row(const double* x, const double* y, const RowBox& box, double* out,
+                      int n) const {
   bool tabulated = floor_.texture != FloorTexture::Tiles;
   if (tabulated) {
     std::fill(out, out + n, 0.0);
-    for (int k = 0; k < count_ && tabulated; ++k) tabulated = octaves_[k].addRow(x, y, out, n);
+    for (int k = 0; k < count_ && tabulated; ++k) tabulated = octaves_[k].addRow(x, y, box, out, n);
   }
   if (!tabulated) {
     for (int i = 0; i < n; ++i) out[i] = at(x[i], y[i]);
@@ -78,10 +90,11 @@ void FloorAlbedo::Octave::corners(int64_t cx, int64_t cy, double& a, double& b, 
 
 void FloorAlbedo::Octave::tabulate(const Eigen::AlignedBox2d& region) {
   if (region.isEmpty() || !region.min().allFinite() || !region.max().allFinite()) return;
-  const double lo_x = floorOf(region.min().x() * scale_x),
-               lo_y = floorOf(region.min().y() * scale_y);
-  const double hi_x = floorOf(region.max().x() * scale_x),
-               hi_y = floorOf(region.max().y() * scale_y);
+  // A cell more on every side: row() wants a cell of margin around its points.
+  const double lo_x = floorOf(region.min().x() * scale_x) - 1,
+               lo_y = floorOf(region.min().y() * scale_y) - 1;
+  const double hi_x = floorOf(region.max().x() * scale_x) + 1,
+               hi_y = floorOf(region.max().y() * scale_y) + 1;
   const double n_x = hi_x - lo_x + 2, n_y = hi_y - lo_y + 2;  // the last cell's far corners too
   if (!(n_x * n_y <= static_cast<double>(kMaxTable)) || std::abs(lo_x) > 0x1p52 ||
       std::abs(lo_y) > 0x1p52)

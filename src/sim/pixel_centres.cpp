@@ -170,12 +170,34 @@ class FloorRow {
       x[c] = (s * (gx + c * hx) - mx) / qz;
       y[c] = (s * (gy + c * hy) - my) / qz;
     }
-    albedo_.row(px, py, albedo_row_.data(), width_);
+    albedo_.row(px, py, floorBox(), albedo_row_.data(), width_);
     // The nearest sheets: a short body, so consecutive columns overlap in the processor.
     const SensorGeometry& geometry = shader_.geometry;
     for (int c = 0; c < width_; ++c)
       offset_[static_cast<std::size_t>(c)] = geometry.nearestSheetOffset(
           Eigen::Vector2d(x[c], y[c]), &slit_[static_cast<std::size_t>(c)]);
+  }
+
+  /// A box around the row's floor points (px, py) of project(): (0, 0) where the ray misses the
+  /// floor. The floor's columns are those of depth < 0, one run (depth is linear in the column),
+  /// along which the point moves monotonically (a ratio of linear functions without a pole), so
+  /// the run's ends bound it.
+  FloorAlbedo::RowBox floorBox() const {
+    int first = 0, last = width_ - 1;
+    while (first <= last && !(depth_[static_cast<std::size_t>(first)] < 0)) ++first;
+    while (last >= first && !(depth_[static_cast<std::size_t>(last)] < 0)) --last;
+    FloorAlbedo::RowBox box;  // (0, 0)
+    if (first > last) return box;
+    const double ends_x[] = {px_[static_cast<std::size_t>(first)],
+                             px_[static_cast<std::size_t>(last)]};
+    const double ends_y[] = {py_[static_cast<std::size_t>(first)],
+                             py_[static_cast<std::size_t>(last)]};
+    box = FloorAlbedo::boxOf(ends_x, ends_y, 2);
+    if (first > 0 || last < width_ - 1) {  // and the zeros of the columns off the floor
+      box.lo_x = std::min(box.lo_x, 0.0), box.hi_x = std::max(box.hi_x, 0.0);
+      box.lo_y = std::min(box.lo_y, 0.0), box.hi_y = std::max(box.hi_y, 0.0);
+    }
+    return box;
   }
 
   /// Writes column c's sample into `s`.

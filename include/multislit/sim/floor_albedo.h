@@ -24,7 +24,19 @@ class FloorAlbedo {
                        const Eigen::AlignedBox2d& region = Eigen::AlignedBox2d());
   /// at() of the n points (x[i], y[i]) into out[i] (to rounding), a row of pixels at a time:
   /// where the row lies in the tables, in vector instructions.
-  void row(const double* x, const double* y, double* out, int n) const;
+  void row(const double* x, const double* y, double* out, int n) const {
+    row(x, y, boxOf(x, y, n), out, n);
+  }
+  /// A box around points [m]; finite false when a coordinate may be NaN or infinite.
+  struct RowBox {
+    double lo_x = 0, hi_x = 0, lo_y = 0, hi_y = 0;
+    bool finite = true;
+  };
+  /// The smallest box around the n points (x[i], y[i]).
+  static RowBox boxOf(const double* x, const double* y, int n);
+  /// row() given a box around the points: the tables serve the row when the box lies a cell
+  /// inside them (the margin takes the box's rounding), else every point is hashed.
+  void row(const double* x, const double* y, const RowBox& box, double* out, int n) const;
   /// Reflectance at 660 nm of the floor at world (x, y) [m], in [0, 1].
   double at(double x, double y) const {
     if (floor_.texture == FloorTexture::Tiles) return clamp01(tileAlbedo(x, y));
@@ -64,9 +76,9 @@ class FloorAlbedo {
     }
     void corners(int64_t cx, int64_t cy, double& a, double& b, double& c, double& d) const;
     void tabulate(const Eigen::AlignedBox2d& region);
-    /// Adds weight x noise() at the n points to g[i]; false (nothing added) when a point is
-    /// outside the table.
-    bool addRow(const double* x, const double* y, double* g, int n) const;
+    /// Adds weight x noise() at the n points inside `box` to g[i]; false (nothing added) when
+    /// the box is not inside the table.
+    bool addRow(const double* x, const double* y, const RowBox& box, double* g, int n) const;
   };
   double tileAlbedo(double x, double y) const;
   static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
