@@ -2,6 +2,7 @@
 #include "multislit/image_file.h"
 #include "multislit/units.h"
 
+#include "avx2_clones.h"
 #include "yaml_io.h"
 
 #include <algorithm>
@@ -190,6 +191,40 @@ int SensorGeometry::nearestSlit(const Eigen::Vector2d& xy) const {
   const double alpha = std::atan(xy.x() - p.curvature * xy.y() * xy.y());
   const long i = std::lround(alpha / (p.slit_spacing * kDeg) + 0.5 * (p.slit_count - 1));
   return static_cast<int>(std::clamp<long>(i, 0, p.slit_count - 1));
+}
+
+MULTISLIT_AVX2_CLONES void SensorGeometry::seriesOfPoints(double* __restrict x,
+                                                          const int* __restrict slit,
+                                                          const double* __restrict tans, int n) {
+  for (int i = 0; i < n; ++i) x[i] = atanSeries(tanFromSheet(x[i], tans[slit[i]]));
+}
+
+void SensorGeometry::nearestSheetOffsets(const double* x, const double* y, int n, double* offset,
+                                         int* slit) const {
+  const double curvature = config_.projector.curvature;
+  for (int i = 0; i < n; ++i) offset[i] = x[i] - curvature * y[i] * y[i];
+  // The sheet: nearestSheet() of the first point, then from each point's to the next one's,
+  // which lies near it (a row of pixels moves monotonically across the sheets). The same
+  // sheet: the count of boundaries at or below the point.
+  const double* boundary = boundary_tan_.data();
+  const auto boundaries = static_cast<int>(boundary_tan_.size());
+  int k = n > 0 ? static_cast<int>(nearestSheet(offset[0])) : 0;
+  for (int i = 0; i < n; ++i) {
+    const double v = offset[i];
+    if (v != v) {  // NaN: nearestSheet() gives the first sheet
+      slit[i] = 0;
+      continue;
+    }
+    while (k < boundaries && v >= boundary[k]) ++k;
+    while (k > 0 && v < boundary[k - 1]) --k;
+    slit[i] = k;
+  }
+  seriesOfPoints(offset, slit, slit_tan_.data(), n);
+  // The series serves |d| <= 0.05 (kSeriesLimit), where it is <= 0.0500; beyond, it is >= 0.83
+  // |d| > 0.0415 (its polynomial in d^2 stays above 0.83): those points are done again.
+  for (int i = 0; i < n; ++i)
+    if (std::abs(offset[i]) > 0.04)
+      offset[i] = nearestSheetOffset(Eigen::Vector2d(x[i], y[i]), &slit[i]);
 }
 
 double SensorGeometry::rowOf(int slit, double t) const {

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <vector>
 
 using multislit::SensorConfig;
 using multislit::SensorGeometry;
@@ -217,6 +219,49 @@ TEST(SensorGeometry, SlitRaysLieOnTheirSheetAndKeepTheirRowAtAnyDepth) {
       ASSERT_TRUE(back.has_value());
       EXPECT_NEAR(*back, t, 1e-12);
     }
+}
+
+// The batch of a row (the simulator's) gives what the point-wise search gives, bit for bit:
+// inside the fan, beyond it (where atan takes over from the series), on the boundaries between
+// sheets, back and forth along a row, and NaN.
+TEST(SensorGeometry, NearestSheetOffsetsOfARowAreThoseOfEachPoint) {
+  SensorConfig config;
+  for (const double curvature : {0.0, 0.08}) {
+    config.projector.curvature = curvature;
+    const SensorGeometry g{config};
+    std::vector<double> x, y;
+    for (int i = 0; i < 4000; ++i) {  // a row across the whole fan and far beyond it
+      x.push_back(-1.2 + 0.0006 * i);
+      y.push_back(0.3 - 0.0001 * i);
+    }
+    for (int i = 0; i < 400; ++i) {  // back and forth, and jumps
+      x.push_back(std::sin(0.37 * i) * 0.5);
+      y.push_back(std::cos(0.11 * i) * 0.4);
+    }
+    for (int slit = 0; slit + 1 < g.slitCount(); ++slit) {  // midway between two sheets
+      const double mid =
+          std::tan(0.5 * (std::atan(g.slitTan(slit)) + std::atan(g.slitTan(slit + 1))));
+      for (const double yy : {0.0, 0.2})
+        for (const double dx : {-1e-17, 0.0, 1e-17})
+          x.push_back(mid + dx + curvature * yy * yy), y.push_back(yy);
+    }
+    x.push_back(std::numeric_limits<double>::quiet_NaN()), y.push_back(0.0);
+    x.push_back(0.1), y.push_back(std::numeric_limits<double>::quiet_NaN());
+    x.push_back(std::numeric_limits<double>::infinity()), y.push_back(0.0);
+    const int n = static_cast<int>(x.size());
+    std::vector<double> offsets(x.size());
+    std::vector<int> slits(x.size());
+    g.nearestSheetOffsets(x.data(), y.data(), n, offsets.data(), slits.data());
+    for (int i = 0; i < n; ++i) {
+      int slit = -1;
+      const double offset = g.nearestSheetOffset(Eigen::Vector2d(x[i], y[i]), &slit);
+      EXPECT_EQ(slits[i], slit) << "point " << i << " (" << x[i] << ", " << y[i] << ")";
+      if (std::isnan(offset))
+        EXPECT_TRUE(std::isnan(offsets[i])) << "point " << i;
+      else
+        EXPECT_EQ(offsets[i], offset) << "point " << i << " (" << x[i] << ", " << y[i] << ")";
+    }
+  }
 }
 
 TEST(SensorGeometry, RotationShrinksRowsPerSlitByCosTheta) {

@@ -92,27 +92,19 @@ class SensorGeometry {
   int nearestSlit(const Eigen::Vector2d& xy_projector) const;
   /// sheetOffset() of the nearest slit, which is stored in *slit (one atan instead of two).
   double nearestSheetOffset(const Eigen::Vector2d& xy_projector, int* slit) const {
-    // The nearest sheet by its tangent (no atan): the boundaries between sheets are monotonic.
     const double x =
         xy_projector.x() - config_.projector.curvature * xy_projector.y() * xy_projector.y();
-    const double cell = (x - lookup_low_) * lookup_per_step_;
-    std::size_t i = 0;
-    if (cell >= static_cast<double>(boundary_lookup_.size())) {
-      i = boundary_tan_.size();
-    } else if (cell >= 0) {
-      i = static_cast<std::size_t>(
-          boundary_lookup_[static_cast<std::size_t>(static_cast<int>(cell))]);
-      if (i < boundary_tan_.size() && x >= boundary_tan_[i]) ++i;
-      if (i > 0 && x < boundary_tan_[i - 1]) --i;  // rounding at a cell's edge
-    }
+    const std::size_t i = nearestSheet(x);
     *slit = static_cast<int>(i);
-    // atan(x) - alpha_i = atan(d) with d = (x - tan alpha_i) / (1 + x tan alpha_i); between two
-    // sheets |d| is a few hundredths, where the series to d^9 is exact to 1e-15.
-    const double t = slit_tan_[i];
-    const double d = (x - t) / (1.0 + x * t), d2 = d * d;
-    if (d2 > 2.5e-3) return std::atan(d);
-    return d * (1.0 - d2 * (1.0 / 3.0 - d2 * (1.0 / 5.0 - d2 * (1.0 / 7.0 - d2 * (1.0 / 9.0)))));
+    // atan(x) - alpha_i = atan(d) with d = (x - tan alpha_i) / (1 + x tan alpha_i).
+    const double d = tanFromSheet(x, slit_tan_[i]);
+    return d * d > kSeriesLimit ? std::atan(d) : atanSeries(d);
   }
+  /// nearestSheetOffset() of the n points (x[i], y[i]) into offset[i] and slit[i], the same
+  /// values: the tangent's series for every point in vector instructions, then atan where a
+  /// point lies beyond its series' range (outside the fan of sheets).
+  void nearestSheetOffsets(const double* x, const double* y, int n, double* offset,
+                           int* slit) const;
   /// Image row of every point lit by slit i at parameter t (independent of depth: the
   /// epipolar lines are rows).
   double rowOf(int slit, double t) const;
@@ -136,6 +128,31 @@ class SensorGeometry {
   std::vector<int> boundary_lookup_;
   double lookup_low_ = 0, lookup_per_step_ = 1;
   Eigen::Vector3d projector_centre_;
+
+  /// The slit whose sheet is nearest to x = x' - curvature y'^2, by its tangent (no atan): the
+  /// boundaries between sheets are monotonic.
+  std::size_t nearestSheet(double x) const {
+    const double cell = (x - lookup_low_) * lookup_per_step_;
+    if (cell >= static_cast<double>(boundary_lookup_.size())) return boundary_tan_.size();
+    if (!(cell >= 0)) return 0;
+    auto i = static_cast<std::size_t>(
+        boundary_lookup_[static_cast<std::size_t>(static_cast<int>(cell))]);
+    if (i < boundary_tan_.size() && x >= boundary_tan_[i]) ++i;
+    if (i > 0 && x < boundary_tan_[i - 1]) --i;  // rounding at a cell's edge
+    return i;
+  }
+  /// tan(atan(x) - atan(t)).
+  static double tanFromSheet(double x, double t) { return (x - t) / (1.0 + x * t); }
+  /// atan(d) for d^2 <= kSeriesLimit, to 1e-15: its series to d^9. Between two sheets |d| is a
+  /// few hundredths.
+  static constexpr double kSeriesLimit = 2.5e-3;
+  static double atanSeries(double d) {
+    const double d2 = d * d;
+    return d * (1.0 - d2 * (1.0 / 3.0 - d2 * (1.0 / 5.0 - d2 * (1.0 / 7.0 - d2 * (1.0 / 9.0)))));
+  }
+  /// In place: x[i] (a point's x' - curvature y'^2) becomes atanSeries(tanFromSheet(x[i],
+  /// tans[slit[i]])), in vector instructions (gathers included) where the CPU has them.
+  static void seriesOfPoints(double* x, const int* slit, const double* tans, int n);
 };
 
 }  // namespace multislit

@@ -171,11 +171,9 @@ class FloorRow {
       y[c] = (s * (gy + c * hy) - my) / qz;
     }
     albedo_.row(px, py, floorBox(), albedo_row_.data(), width_);
-    // The nearest sheets: a short body, so consecutive columns overlap in the processor.
+    // The nearest sheets, the whole row at once.
     const SensorGeometry& geometry = shader_.geometry;
-    for (int c = 0; c < width_; ++c)
-      offset_[static_cast<std::size_t>(c)] = geometry.nearestSheetOffset(
-          Eigen::Vector2d(x[c], y[c]), &slit_[static_cast<std::size_t>(c)]);
+    geometry.nearestSheetOffsets(x, y, width_, offset_.data(), slit_.data());
   }
 
   /// A box around the row's floor points (px, py) of project(): (0, 0) where the ray misses the
