@@ -2,6 +2,8 @@
 
 #include "sim/parallel_rows.h"
 
+#include "avx2_clones.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -127,6 +129,30 @@ std::vector<std::vector<ColumnSpan>> objectColumns(const Shader& shader) {
   return rows;
 }
 
+// A row's rays: column c's world ray w + c d from the camera centre o, its projector ray g + c h,
+// the projector centre m (in projector axes).
+struct RowRays {
+  double wx, wy, wz, dx, dy, dz, ox, oy, oz, gx, gy, gz, hx, hy, hz, mx, my, mz;
+};
+
+// Where each column's ray meets the floor: its world z (depth, < 0 when it meets it), the floor
+// point (px, py; 0 where it does not: a point the texture's tables hold) and its normalized
+// projector coordinates (x, y). No dependencies between columns: a loop the compiler vectorizes.
+MULTISLIT_AVX2_CLONES void projectRow(const RowRays r, int width, double* __restrict depth,
+                                      double* __restrict px, double* __restrict py,
+                                      double* __restrict x, double* __restrict y) {
+  for (int c = 0; c < width; ++c) {
+    depth[c] = r.wz + c * r.dz;
+    const double s = -r.oz / depth[c];
+    const bool floor = depth[c] < 0;
+    px[c] = floor ? r.ox + s * (r.wx + c * r.dx) : 0.0;
+    py[c] = floor ? r.oy + s * (r.wy + c * r.dy) : 0.0;
+    const double qz = s * (r.gz + c * r.hz) - r.mz;
+    x[c] = (s * (r.gx + c * r.hx) - r.mx) / qz;
+    y[c] = (s * (r.gy + c * r.hy) - r.my) / qz;
+  }
+}
+
 // The floor along a row's pixel centres: each column's sample as trace() gives it where no object
 // is on the ray, in closed form. project() has no dependencies between columns, so the compiler
 // vectorizes it.
@@ -150,26 +176,13 @@ class FloorRow {
     const Eigen::Vector3d g0 = projector * first, g1 = projector.col(0) / f,
                           m = projector * shader_.geometry.projectorCentre();
     const Eigen::Vector3d& o = shader_.camera_centre;
-    // Plain numbers and unaliased arrays: a loop the compiler vectorizes.
-    const double wx = w0_.x(), wy = w0_.y(), wz = w0_.z(), dx = w1_.x(), dy = w1_.y(), dz = w1_.z(),
-                 ox = o.x(), oy = o.y(), oz = o.z();
-    const double gx = g0.x(), gy = g0.y(), gz = g0.z(), hx = g1.x(), hy = g1.y(), hz = g1.z(),
-                 mx = m.x(), my = m.y(), mz = m.z();
-    double* __restrict depth = depth_.data();
-    double* __restrict x = x_.data();
-    double* __restrict y = y_.data();
-    double* __restrict px = px_.data();
-    double* __restrict py = py_.data();
-    for (int c = 0; c < width_; ++c) {
-      depth[c] = wz + c * dz;  // the ray's world z, < 0 when it meets the floor
-      const double s = -oz / depth[c];
-      const bool floor = depth[c] < 0;  // else 0: a point the texture's tables hold
-      px[c] = floor ? ox + s * (wx + c * dx) : 0.0;
-      py[c] = floor ? oy + s * (wy + c * dy) : 0.0;
-      const double qz = s * (gz + c * hz) - mz;
-      x[c] = (s * (gx + c * hx) - mx) / qz;
-      y[c] = (s * (gy + c * hy) - my) / qz;
-    }
+    const RowRays rays{w0_.x(), w0_.y(), w0_.z(), w1_.x(), w1_.y(), w1_.z(), o.x(), o.y(), o.z(),
+                       g0.x(),  g0.y(),  g0.z(),  g1.x(),  g1.y(),  g1.z(),  m.x(), m.y(), m.z()};
+    double* px = px_.data();
+    double* py = py_.data();
+    double* x = x_.data();
+    double* y = y_.data();
+    projectRow(rays, width_, depth_.data(), px, py, x, y);
     albedo_.row(px, py, floorBox(), albedo_row_.data(), width_);
     // The nearest sheets, the whole row at once.
     const SensorGeometry& geometry = shader_.geometry;
