@@ -29,6 +29,7 @@ refused_with 2 "--screw needs X,Y in metres" "$M" walk --screw 1,2,3 --out w
 refused_with 2 "--frames must be a whole number in [1, 100000], not 0" "$M" bench --frames 0
 refused_with 2 "--passes must be a whole number in [1, 100000]" "$M" bench --passes 0
 refused_with 2 "--ahead must be a whole number in [1, 100000], not 0" "$M" emulate --walk --ahead 0
+refused_with 2 "--ahead needs --walk" "$M" emulate --ahead 5
 refused_with 2 "--ahead 5000: at most 1718 images of this size fit in 2 GiB" \
   "$M" emulate --walk --ahead 5000
 refused_with 1 "region_width must be 0 (automatic) or in [3, 16384] px" \
