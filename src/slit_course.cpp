@@ -8,14 +8,27 @@
 namespace multislit {
 namespace {
 
-/// u = a + b r + c r^2 through `pts`, r = row / 100, by least squares refitted without the
-/// points beyond three robust sigmas (centres cut by a dark line or a speckle grain); with
-/// `curvature` given, c is fixed to it. Returns (a, b, c) and the median |residual| [px].
+/// A slit's course u = a + b r + c r^2, r = row / 100 (coef: a, b, c), and the median |residual|
+/// of the points it was fitted to [px].
 struct Course {
   Eigen::Vector3d coef = Eigen::Vector3d::Zero();
   double spread = 0;
+  double at(int row) const {  // u at an image row [px]
+    const double r = row / 100.0;
+    return coef(0) + coef(1) * r + coef(2) * r * r;
+  }
 };
 
+/// The median |u - course.at(row)| of `pts` [px].
+double medianDistance(const std::vector<Centre>& pts, const Course& course) {
+  std::vector<double> d;
+  for (const Centre& c : pts) d.push_back(std::abs(c.u - course.at(c.row)));
+  return upperMedian(d);
+}
+
+/// The course through `pts` by least squares, refitted without the points beyond three robust
+/// sigmas (centres cut by a dark line or a speckle grain); with `curvature` given, c is fixed to
+/// it.
 Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullptr) {
   const auto n = static_cast<long>(pts.size());
   const int unknowns = curvature ? 2 : 3;
@@ -28,30 +41,17 @@ Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullp
     if (!curvature) a(i, 2) = r * r;
     b(i) = pts[static_cast<std::size_t>(i)].u - (curvature ? *curvature * r * r : 0.0);
   }
-  std::vector<double> res(pts.size());
-  double median = 0;
+  Course c;
   for (int pass = 0; pass < 2; ++pass) {
     x = (weight.asDiagonal() * a).colPivHouseholderQr().solve(weight.asDiagonal() * b);
-    for (long i = 0; i < n; ++i)
-      res[static_cast<std::size_t>(i)] = std::abs((a.row(i) * x)(0) - b(i));
-    median = upperMedian(res);
-    for (long i = 0; i < n; ++i)
-      weight(i) = res[static_cast<std::size_t>(i)] <= std::max(1.0, 4.5 * median) ? 1.0 : 0.0;
+    c.coef << x(0), x(1), curvature ? *curvature : x(2);
+    c.spread = medianDistance(pts, c);
+    for (long i = 0; i < n; ++i) {
+      const Centre& p = pts[static_cast<std::size_t>(i)];
+      weight(i) = std::abs(p.u - c.at(p.row)) <= std::max(1.0, 4.5 * c.spread) ? 1.0 : 0.0;
+    }
   }
-  Course c;
-  c.coef << x(0), x(1), curvature ? *curvature : x(2);
-  c.spread = median;
   return c;
-}
-
-/// The median |u - course(row)| of `pts` [px].
-double medianDistance(const std::vector<Centre>& pts, const Course& course) {
-  std::vector<double> d;
-  for (const Centre& c : pts) {
-    const double r = c.row / 100.0;
-    d.push_back(std::abs(c.u - (course.coef(0) + course.coef(1) * r + course.coef(2) * r * r)));
-  }
-  return upperMedian(d);
 }
 
 /// The curvature the projector gives its slits (the pattern's distortion), as the median over
