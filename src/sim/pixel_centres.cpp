@@ -153,6 +153,19 @@ MULTISLIT_AVX2_CLONES void projectRow(const RowRays r, int width, double* __rest
   }
 }
 
+// One row's outputs of traceCentres(), and how a pixel's sample gives them.
+struct RowOut {
+  Shader::Sample* samples;
+  float* ambient;
+  uchar* near;
+  double light, reach, t_near;  // the ambient light; the reach and |t| of a pixel near a sheet
+  void finish(std::size_t k) const {  // the ambient light, and whether a sheet may light it
+    const Shader::Sample& s = samples[k];
+    ambient[k] = static_cast<float>(light * (s.albedo + s.glare));
+    near[k] = std::abs(s.offset) < reach && std::abs(s.t) < t_near;
+  }
+};
+
 // The floor along a row's pixel centres: each column's sample as trace() gives it where no object
 // is on the ray, in closed form. project() has no dependencies between columns, so the compiler
 // vectorizes it.
@@ -231,6 +244,32 @@ class FloorRow {
       shader_.glare(s, point_w, w0_ + c * w1_);
       shader_.illuminate(s, Eigen::Vector2d(x_[k], y_[k]), Eigen::Vector3d::UnitZ(), point_w,
                          reach);
+    }
+  }
+
+  /// at() and RowOut::finish() of columns [first, end), no object on their rays. Most lie far
+  /// from every sheet (beyond `lit` > out.reach): their sample in one store, not near.
+  void run(int first, int end, double lit, const RowOut& out) const {
+    const bool sky = !(shader_.camera_centre.z() > 0);
+    for (int c = first; c < end; ++c) {
+      const auto k = static_cast<std::size_t>(c);
+      const double offset = offset_[k];
+      if (sky || !(depth_[k] < 0) || glossy_ || !(std::abs(offset) > lit)) {
+        at(c, lit, out.samples[k]);
+        out.finish(k);
+        continue;
+      }
+      Shader::Sample s;
+      s.object = 0;
+      s.slit = static_cast<std::int16_t>(slit_[k]);
+      s.t = static_cast<float>(y_[k]);
+      s.offset = offset;
+      s.albedo = static_cast<float>(albedo_row_[k]);
+      s.radiance = s.glare = 0;
+      s.width = 1;
+      out.samples[k] = s;
+      out.ambient[k] = static_cast<float>(out.light * (s.albedo + s.glare));
+      out.near[k] = 0;
     }
   }
 
@@ -343,25 +382,24 @@ void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod
     for (int r = rows.start; r < rows.end; ++r) {
       if (method == RenderMethod::Culled) floor.project(r);  // Exhaustive traces every ray
       Shader::Sample* row = &centre.samples[static_cast<std::size_t>(r) * width];
+      const RowOut out{row,
+                       centre.ambient.ptr<float>(r),
+                       centre.near.ptr<uchar>(r),
+                       shader.render.ambient,
+                       reach,
+                       t_near};
       int c = 0;
-      float* ambient = centre.ambient.ptr<float>(r);
-      uchar* near = centre.near.ptr<uchar>(r);
-      auto finish = [&](int k) {  // the ambient light, and whether a sheet may light the pixel
-        const Shader::Sample& s = row[k];
-        ambient[k] = static_cast<float>(shader.render.ambient * (s.albedo + s.glare));
-        near[k] = std::abs(s.offset) < reach && std::abs(s.t) < t_near;
-      };
       for (const ColumnSpan& span : objects[static_cast<std::size_t>(r)]) {
-        for (; c < span.first; ++c) floor.at(c, lit, row[c]), finish(c);
-        for (; c <= span.last; ++c) {
+        floor.run(c, span.first, lit, out);
+        for (c = std::max(c, span.first); c <= span.last; ++c) {
           if (method == RenderMethod::Culled)
             floor.traced(c, r, lit, row[c]);
           else
             row[c] = shader.trace(c, r, lit);
-          finish(c);
+          out.finish(static_cast<std::size_t>(c));
         }
       }
-      for (; c < width; ++c) floor.at(c, lit, row[c]), finish(c);
+      floor.run(c, width, lit, out);
     }
   });
   // Catch pixels split by an edge.
