@@ -58,6 +58,7 @@ bool ArgParser::parse(int argc, char** argv) {
     }
     const auto spec = specs_.find(name);
     if (spec == specs_.end()) throw UsageError("unknown option --" + name);
+    given_.insert(name);
     if (spec->second.is_flag) {
       if (inline_value) throw UsageError("--" + name + " takes no value");
       values_[name] = "1";

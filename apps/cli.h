@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -38,6 +39,8 @@ class ArgParser {
   double number(const std::string& name, double lo, double hi) const;
   long integer(const std::string& name, long lo, long hi) const;
   bool has(const std::string& name) const;  ///< flag given, or option given a non-empty value
+  /// Whether the command line named the option (its default aside).
+  bool given(const std::string& name) const { return given_.count(name) > 0; }
   std::vector<std::string> list(const std::string& name) const;
   const std::vector<std::string>& rest() const { return positional_values_; }
   std::string help() const;
@@ -52,6 +55,7 @@ class ArgParser {
   std::vector<std::string> order_;
   std::map<std::string, Spec> specs_;
   std::map<std::string, std::string> values_;
+  std::set<std::string> given_;
   std::map<std::string, std::vector<std::string>> lists_;
   std::string positional_name_, positional_help_;
   std::size_t positional_min_ = 0;

@@ -172,11 +172,9 @@ void addOptions(cli::ArgParser& args) {
             "serve the demo's walk (multislit walk) rendered live as the camera sends, instead "
             "of a scenario's frames rendered first; a frame not rendered in time carries the "
             "last image again and is counted");
-  args.option("ahead", "",
+  args.option("ahead", std::to_string(CameraEmulator::kDefaultAhead),
               "with --walk: images made ahead and kept ready, made while no client streams (the "
-              "command waits for them), " +
-                  std::to_string(CameraEmulator::kDefaultAhead) +
-                  " if not given; auto: enough that the demo's walk of " +
+              "command waits for them); auto: enough that the demo's walk of " +
                   std::to_string(kWalkFrames) +
                   " frames comes at --fps without a late frame, from the time the first images "
                   "take");
@@ -211,7 +209,7 @@ int runEmulate(int argc, char** argv) {
   const EmulatorConfig config = emulatorConfigFromArgs(args);
   const bool live = args.has("walk");
   const bool auto_ahead = args.str("ahead") == "auto";
-  if (args.has("ahead") && !live)
+  if (args.given("ahead") && !live)
     throw cli::UsageError("--ahead needs --walk: a scenario's frames are all made before serving");
 
   RenderConfig render;
@@ -222,10 +220,8 @@ int runEmulate(int argc, char** argv) {
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
   const std::size_t limit = aheadLimit(sensor, render.bit_depth);
   // auto: room for the images it times while no client streams
-  const std::size_t ahead = auto_ahead ? kTimed + 1
-                            : !args.has("ahead")
-                                ? CameraEmulator::kDefaultAhead
-                                : static_cast<std::size_t>(args.integer("ahead", 1, 100000));
+  const std::size_t ahead =
+      auto_ahead ? kTimed + 1 : static_cast<std::size_t>(args.integer("ahead", 1, 100000));
   if (ahead > limit)
     throw cli::UsageError("--ahead " + std::to_string(ahead) + ": at most " +
                           std::to_string(limit) + " images of this size fit in 2 GiB");
