@@ -19,11 +19,17 @@ struct Course {
   }
 };
 
-/// The median |u - course.at(row)| of `pts` [px].
-double medianDistance(const std::vector<Centre>& pts, const Course& course) {
+/// |u - course.at(row)| of each of `pts` [px].
+std::vector<double> distances(const std::vector<Centre>& pts, const Course& course) {
   std::vector<double> d;
+  d.reserve(pts.size());
   for (const Centre& c : pts) d.push_back(std::abs(c.u - course.at(c.row)));
-  return upperMedian(d);
+  return d;
+}
+
+/// Their median [px].
+double medianDistance(const std::vector<Centre>& pts, const Course& course) {
+  return upperMedian(distances(pts, course));
 }
 
 /// The course through `pts` by least squares, refitted without the points beyond three robust
@@ -45,11 +51,10 @@ Course fitCourse(const std::vector<Centre>& pts, const double* curvature = nullp
   for (int pass = 0; pass < 2; ++pass) {
     x = (weight.asDiagonal() * a).colPivHouseholderQr().solve(weight.asDiagonal() * b);
     c.coef << x(0), x(1), curvature ? *curvature : x(2);
-    c.spread = medianDistance(pts, c);
-    for (long i = 0; i < n; ++i) {
-      const Centre& p = pts[static_cast<std::size_t>(i)];
-      weight(i) = std::abs(p.u - c.at(p.row)) <= std::max(1.0, 4.5 * c.spread) ? 1.0 : 0.0;
-    }
+    const std::vector<double> d = distances(pts, c);
+    c.spread = upperMedian(d);
+    for (long i = 0; i < n; ++i)
+      weight(i) = d[static_cast<std::size_t>(i)] <= std::max(1.0, 4.5 * c.spread) ? 1.0 : 0.0;
   }
   return c;
 }
