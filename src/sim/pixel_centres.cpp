@@ -248,7 +248,7 @@ class FloorRow {
   }
 
   /// at() and RowOut::finish() of columns [first, end), no object on their rays. Most lie far
-  /// from every sheet (beyond `lit` > out.reach): their sample in one store, not near.
+  /// from every sheet (beyond `lit`), where at() lights nothing: their sample in one store.
   void run(int first, int end, double lit, const RowOut& out) const {
     const bool sky = !(shader_.camera_centre.z() > 0);
     for (int c = first; c < end; ++c) {
@@ -268,8 +268,7 @@ class FloorRow {
       s.radiance = s.glare = 0;
       s.width = 1;
       out.samples[k] = s;
-      out.ambient[k] = static_cast<float>(out.light * (s.albedo + s.glare));
-      out.near[k] = 0;
+      out.finish(k);
     }
   }
 
