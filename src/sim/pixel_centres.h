@@ -43,9 +43,6 @@ class CentrePool {
   std::vector<std::unique_ptr<CentreSamples>> free_;
 };
 
-/// For each object, a box of projector coordinates outside which its shadow cannot fall.
-std::vector<ShadowBox> shadowBoxes(const Shader& shader);
-
 /// The floor the camera sees, within 5 m (the rays of every 8th pixel): where the floor's texture
 /// is worth tabulating.
 Eigen::AlignedBox2d floorInView(const Shader& shader);

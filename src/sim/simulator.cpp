@@ -1,6 +1,7 @@
 #include "multislit/sim/simulator.h"
 
 #include "sim/image_noise.h"
+#include "sim/object_bounds.h"
 #include "sim/parallel_rows.h"
 #include "sim/pixel_centres.h"
 #include "sim/shader.h"
