@@ -269,9 +269,8 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     if (!t.reference_error.empty()) continue;
     std::printf(
         "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu (missed: %zu %zu %zu) | false %zu "
-        "(%zu near the object) of %zu (%zu on the truth), %zu groups | paper: valid %zu (%zu on "
-        "the "
-        "truth) false %zu%s\n",
+        "(%zu near the object) of %zu (%zu on the truth), %zu groups | paper: valid %zu "
+        "(%zu on the truth) false %zu%s\n",
         i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
         t.miss_within, t.miss_ungrouped, t.false_points, t.false_near, t.valid, t.on_truth,
         t.false_groups, t.paper_valid, t.paper_on_truth, t.paper_false,
