@@ -200,7 +200,7 @@ MULTISLIT_AVX2_CLONES void SensorGeometry::seriesOfPoints(double* __restrict x,
 }
 
 void SensorGeometry::nearestSheetOffsets(const double* x, const double* y, int n, double* offset,
-                                         int* slit) const {
+                                         int* slit, bool exact_far) const {
   const double curvature = config_.projector.curvature;
   for (int i = 0; i < n; ++i) offset[i] = x[i] - curvature * y[i] * y[i];
   // The sheet: nearestSheet() of the first point, then from each point's to the next one's,
@@ -221,9 +221,12 @@ void SensorGeometry::nearestSheetOffsets(const double* x, const double* y, int n
   }
   seriesOfPoints(offset, slit, slit_tan_.data(), n);
   // The series serves |d| <= 0.05 (kSeriesLimit), where it is <= 0.0500; beyond, it is >= 0.83
-  // |d| > 0.0415 (its polynomial in d^2 stays above 0.83): those points are done again.
+  // |d| > 0.0415 (its polynomial in d^2 stays above 0.83): those points are done again, where
+  // their exact value is wanted (atan(d) >= atan(0.05) > kFarOffset there).
+  static_assert(kFarOffset < 0.0415 && kSeriesLimit == 2.5e-3, "the series' bounds");
+  if (!exact_far) return;
   for (int i = 0; i < n; ++i)
-    if (std::abs(offset[i]) > 0.04)
+    if (std::abs(offset[i]) > kFarOffset)
       offset[i] = nearestSheetOffset(Eigen::Vector2d(x[i], y[i]), &slit[i]);
 }
 

@@ -251,16 +251,31 @@ TEST(SensorGeometry, NearestSheetOffsetsOfARowAreThoseOfEachPoint) {
     const int n = static_cast<int>(x.size());
     std::vector<double> offsets(x.size());
     std::vector<int> slits(x.size());
+    std::vector<double> near_offsets(x.size());  // exact_far false: exact within kFarOffset
+    std::vector<int> near_slits(x.size());
     g.nearestSheetOffsets(x.data(), y.data(), n, offsets.data(), slits.data());
+    g.nearestSheetOffsets(x.data(), y.data(), n, near_offsets.data(), near_slits.data(), false);
+    int far = 0;
     for (int i = 0; i < n; ++i) {
       int slit = -1;
       const double offset = g.nearestSheetOffset(Eigen::Vector2d(x[i], y[i]), &slit);
       EXPECT_EQ(slits[i], slit) << "point " << i << " (" << x[i] << ", " << y[i] << ")";
-      if (std::isnan(offset))
+      EXPECT_EQ(near_slits[i], slit) << "point " << i;
+      if (std::isnan(offset)) {
         EXPECT_TRUE(std::isnan(offsets[i])) << "point " << i;
-      else
-        EXPECT_EQ(offsets[i], offset) << "point " << i << " (" << x[i] << ", " << y[i] << ")";
+        EXPECT_TRUE(std::isnan(near_offsets[i])) << "point " << i;
+        continue;
+      }
+      EXPECT_EQ(offsets[i], offset) << "point " << i << " (" << x[i] << ", " << y[i] << ")";
+      if (std::abs(offset) <= SensorGeometry::kFarOffset) {
+        EXPECT_EQ(near_offsets[i], offset) << "point " << i;
+      } else {  // the same side of the sheet, and as far as it needs to be seen to be
+        ++far;
+        EXPECT_EQ(std::signbit(near_offsets[i]), std::signbit(offset)) << "point " << i;
+        EXPECT_GT(std::abs(near_offsets[i]), SensorGeometry::kFarOffset) << "point " << i;
+      }
     }
+    EXPECT_GT(far, 2000);  // most of the row lies outside the fan
   }
 }
 

@@ -100,11 +100,17 @@ class SensorGeometry {
     const double d = tanFromSheet(x, slit_tan_[i]);
     return d * d > kSeriesLimit ? std::atan(d) : atanSeries(d);
   }
+  /// Points farther than this from their nearest sheet [rad] lie outside the fan of sheets:
+  /// between two sheets |offset| is at most half their spacing (0.020 rad for the default sensor).
+  static constexpr double kFarOffset = 0.04;
   /// nearestSheetOffset() of the n points (x[i], y[i]) into offset[i] and slit[i], the same
   /// values: the tangent's series for every point in vector instructions, then atan where a
-  /// point lies beyond its series' range (outside the fan of sheets).
-  void nearestSheetOffsets(const double* x, const double* y, int n, double* offset,
-                           int* slit) const;
+  /// point lies beyond its series' range (outside the fan of sheets). With `exact_far` false, a
+  /// point farther than kFarOffset from its sheet keeps its series' value instead, of the same
+  /// sign and beyond kFarOffset too (at least 0.83 of the tangent's): for callers that only ask
+  /// whether a point is near a sheet. The points within kFarOffset and every slit[i] are the same.
+  void nearestSheetOffsets(const double* x, const double* y, int n, double* offset, int* slit,
+                           bool exact_far = true) const;
   /// Image row of every point lit by slit i at parameter t (independent of depth: the
   /// epipolar lines are rows).
   double rowOf(int slit, double t) const;

@@ -81,9 +81,10 @@ class FloorRow {
     double* y = y_.data();
     projectRow(rays, width_, depth_.data(), px, py, x, y);
     albedo_.row(px, py, floorBox(), albedo_row_.data(), width_);
-    // The nearest sheets, the whole row at once.
+    // The nearest sheets, the whole row at once; a pixel outside the fan only needs to be seen to
+    // be far from every sheet (the light's reach is a few milliradians).
     const SensorGeometry& geometry = shader_.geometry;
-    geometry.nearestSheetOffsets(x, y, width_, offset_.data(), slit_.data());
+    geometry.nearestSheetOffsets(x, y, width_, offset_.data(), slit_.data(), false);
   }
 
   /// A box around the row's floor points (px, py) of project(): (0, 0) where the ray misses the
