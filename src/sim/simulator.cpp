@@ -18,13 +18,16 @@
 namespace multislit {
 namespace {
 
-// How far from a sheet's centre [rad] light is traced: beyond 4.5 sigma a sheet adds < 4e-5 of
-// its peak, for the widest sheet on any surface.
+// Beyond this many of its sigmas from its centre a sheet adds < 4e-5 of its peak.
+constexpr double kSheetSigmas = 4.5;
+
+// How far from a sheet's centre [rad] light is traced: kSheetSigmas for the widest sheet on any
+// surface, and two pixels more.
 double sheetReach(const Scene& scene, double sigma, double pixel) {
   double widest = scene.stripeWidth(0);
   for (std::size_t k = 0; k < scene.objects.size(); ++k)
     widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
-  return 4.5 * sigma * widest + 2 * pixel;
+  return kSheetSigmas * sigma * widest + 2 * pixel;
 }
 
 // Whether the sheet's offset is linear over pixel (r, c): the same surface and slit, lit, not at
@@ -45,23 +48,30 @@ inline bool offsetIsLinear(const CentreSamples& centre, int r, int c, double t_i
 }
 
 // Laser light integrated over each pixel near a sheet: exactly where the sheet's offset is
-// linear over the pixel (same surface and slit, lit, not at the slit's end), else sampled at
-// n x n sub-pixel positions (edges, shadows, slit ends).
+// linear over the pixel (same surface and slit, lit, not at the slit's end; none where the whole
+// pixel lies beyond kSheetSigmas of its sheet), else sampled at n x n sub-pixel positions (edges,
+// shadows, slit ends).
 cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double reach,
                        double pixel) {
   const int n = shader.render.supersample, width = centre.width, height = centre.height;
   const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 1.5 * pixel;
-  cv::Mat laser(height, width, CV_32F, cv::Scalar(0));
+  cv::Mat laser(height, width, CV_32F);  // every pixel is written
   parallelRows(height, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
+      float* out = laser.ptr<float>(r);
+      const uchar* near = centre.near.ptr<uchar>(r);
       for (int c = 0; c < width; ++c) {
-        if (!centre.near.ptr<uchar>(r)[c]) continue;
+        out[c] = 0;
+        if (!near[c]) continue;
         const Shader::Sample& m = centre.at(r, c);
         double value = 0;
         if (offsetIsLinear(centre, r, c, t_inner, sigma)) {
           const double gu = 0.5 * (centre.at(r, c + 1).offset - centre.at(r, c - 1).offset);
           const double gv = 0.5 * (centre.at(r + 1, c).offset - centre.at(r - 1, c).offset);
-          value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sigma * m.width);
+          const double sheet = sigma * m.width;
+          // The offset nearest the sheet on the pixel: its centre's less half its spread.
+          if (std::abs(m.offset) - 0.5 * (std::abs(gu) + std::abs(gv)) <= kSheetSigmas * sheet)
+            value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sheet);
         } else {
           for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)
@@ -69,7 +79,7 @@ cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double
                                                  reach, m.object, m.albedo));
           value /= n * n;
         }
-        laser.ptr<float>(r)[c] = static_cast<float>(value);
+        out[c] = static_cast<float>(value);
       }
     }
   });
