@@ -41,6 +41,22 @@ void quantize(const float* __restrict value, float full, T* __restrict out, int 
   for (int c = 0; c < n; ++c) out[c] = static_cast<T>(static_cast<int>(value[c] * full + 0.5f));
 }
 
+// cv::GaussianBlur of `image` (kernel `ksize`, sigma `sigma`, BORDER_REFLECT) into `out` (made by
+// create(), not `image`) in bands of rows on OpenCV's threads (its filters run on one). Each band
+// is filtered as a region of the whole image, which takes the rows beyond the band from the image
+// (the reflection only at its edges): the same values as one call.
+void blurInBands(const cv::Mat& image, cv::Size ksize, double sigma, cv::Mat& out) {
+  out.create(image.size(), image.type());
+  const int bands = std::max(1, std::min(image.rows / 64, 2 * cv::getNumThreads()));
+  parallelRows(bands, [&](const cv::Range& range) {
+    for (int b = range.start; b < range.end; ++b) {
+      const cv::Range rows(image.rows * b / bands, image.rows * (b + 1) / bands);
+      cv::Mat band = out.rowRange(rows);
+      cv::GaussianBlur(image.rowRange(rows), band, ksize, sigma, sigma, cv::BORDER_REFLECT);
+    }
+  });
+}
+
 }  // namespace
 
 // Gamma(shape k, mean 1) quantile at the normal quantile of each z of the table.
@@ -63,16 +79,17 @@ std::vector<float> gammaQuantiles(double contrast) {
 // (Gaussian) or the field's normal quantile mapped to the gamma distribution's (Gamma), where
 // `lit` (CV_8U) is set: `laser` must be 0 elsewhere.
 void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render, uint64_t frame,
-                  const std::vector<float>& gamma_quantiles) {
+                  const std::vector<float>& gamma_quantiles, cv::Mat& field, cv::Mat& blurred) {
   const double g = render.speckle_grain;
   const int ksize = cv::saturate_cast<int>(g * 8 + 1) | 1;  // OpenCV's kernel for CV_32F
-  cv::Mat speckle(laser.rows, laser.cols, CV_32F);
+  field.create(laser.rows, laser.cols, CV_32F);
   parallelRows(laser.rows, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r)
       normalRow(rowStream(render.seed, frame, static_cast<uint64_t>(r), kSpeckle),
-                speckle.ptr<float>(r), laser.cols);
+                field.ptr<float>(r), laser.cols);
   });
-  cv::GaussianBlur(speckle, speckle, cv::Size(ksize, ksize), g, g, cv::BORDER_REFLECT);
+  blurInBands(field, cv::Size(ksize, ksize), g, blurred);
+  const cv::Mat& speckle = blurred;
   // Gaussian: 1 + contrast x the field of unit std; Gamma: the field's normal quantile mapped to
   // the gamma distribution's. The blurred field's std is the sum of the squared 1-D kernel
   // weights (OpenCV's kernel); a continuous kernel gives 1 / (2 sqrt(pi) g).
@@ -103,12 +120,12 @@ void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render
   });
 }
 
-// The camera's image of `irradiance` [FS]: lens blur, then shot and read noise, saturation and
-// quantization to render.bit_depth.
-cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t frame) {
-  if (render.blur_sigma > 0)
-    cv::GaussianBlur(irradiance, irradiance, cv::Size(), render.blur_sigma, render.blur_sigma,
-                     cv::BORDER_REFLECT);
+// The camera's image of `sharp` (the irradiance [FS]): lens blur, then shot and read noise,
+// saturation and quantization to render.bit_depth.
+cv::Mat exposeSensor(const cv::Mat& sharp, const RenderConfig& render, uint64_t frame,
+                     cv::Mat& blurred) {
+  if (render.blur_sigma > 0) blurInBands(sharp, cv::Size(), render.blur_sigma, blurred);
+  const cv::Mat& irradiance = render.blur_sigma > 0 ? blurred : sharp;
   const float full = render.bit_depth == 8 ? 255.0f : 65535.0f;
   cv::Mat image(irradiance.rows, irradiance.cols, render.bit_depth == 8 ? CV_8U : CV_16U);
   const auto per_electron = static_cast<float>(1.0 / render.full_well),

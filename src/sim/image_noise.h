@@ -18,12 +18,14 @@ std::vector<float> gammaQuantiles(double contrast);
 
 /// Multiplies `laser` by the speckle of `render` (mean 1, std speckle_contrast per pixel) of frame
 /// `frame`, where `lit` (CV_8U) is set; `laser` must be 0 elsewhere. `gamma_quantiles` from
-/// gammaQuantiles() for SpeckleModel::Gamma.
+/// gammaQuantiles() for SpeckleModel::Gamma. `field` and `blurred` are buffers (made by create()).
 void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render, uint64_t frame,
-                  const std::vector<float>& gamma_quantiles);
+                  const std::vector<float>& gamma_quantiles, cv::Mat& field, cv::Mat& blurred);
 
 /// The camera's image of `irradiance` (CV_32F) [FS]: lens blur, then shot and read noise,
-/// saturation and quantization to render.bit_depth (CV_8U or CV_16U).
-cv::Mat exposeSensor(cv::Mat irradiance, const RenderConfig& render, uint64_t frame);
+/// saturation and quantization to render.bit_depth (CV_8U or CV_16U). `blurred` is a buffer (made
+/// by create()), not `irradiance`.
+cv::Mat exposeSensor(const cv::Mat& irradiance, const RenderConfig& render, uint64_t frame,
+                     cv::Mat& blurred);
 
 }  // namespace multislit

@@ -182,19 +182,6 @@ class FloorRow {
 
 }  // namespace
 
-std::unique_ptr<CentreSamples> CentrePool::take() {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  if (free_.empty()) return std::make_unique<CentreSamples>();
-  std::unique_ptr<CentreSamples> centre = std::move(free_.back());
-  free_.pop_back();
-  return centre;
-}
-
-void CentrePool::give(std::unique_ptr<CentreSamples> centre) {
-  const std::lock_guard<std::mutex> lock(mutex_);
-  if (free_.size() < 2) free_.push_back(std::move(centre));
-}
-
 Eigen::AlignedBox2d floorInView(const Shader& shader) {
   const CameraConfig& camera = shader.geometry.config().camera;
   const Eigen::Vector3d& o = shader.camera_centre;

@@ -5,8 +5,6 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include <memory>
-#include <mutex>
 #include <vector>
 
 namespace multislit {
@@ -30,18 +28,6 @@ struct CentreSamples {
 /// (render_methods_test). The floor's albedo is shader.floor_albedo's (required).
 void traceCentres(const Shader& shader, double reach, double pixel, RenderMethod method,
                   CentreSamples& centre);
-
-/// CentreSamples kept from render to render: a frame's are 40 MB, and fresh pages cost more than
-/// tracing the floor. Thread-safe; a render takes one and gives it back.
-class CentrePool {
- public:
-  std::unique_ptr<CentreSamples> take();
-  void give(std::unique_ptr<CentreSamples> centre);
-
- private:
-  std::mutex mutex_;
-  std::vector<std::unique_ptr<CentreSamples>> free_;
-};
 
 /// The floor the camera sees, within 5 m (the rays of every 8th pixel): where the floor's texture
 /// is worth tabulating.

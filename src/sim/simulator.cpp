@@ -4,6 +4,7 @@
 #include "sim/object_bounds.h"
 #include "sim/parallel_rows.h"
 #include "sim/pixel_centres.h"
+#include "sim/render_buffers.h"
 #include "sim/shader.h"
 
 #include <opencv2/core.hpp>
@@ -51,11 +52,11 @@ inline bool offsetIsLinear(const CentreSamples& centre, int r, int c, double t_i
 // linear over the pixel (same surface and slit, lit, not at the slit's end; none where the whole
 // pixel lies beyond kSheetSigmas of its sheet), else sampled at n x n sub-pixel positions (edges,
 // shadows, slit ends).
-cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double reach,
-                       double pixel) {
+void integrateLaser(const Shader& shader, const CentreSamples& centre, double reach, double pixel,
+                    cv::Mat& laser) {
   const int n = shader.render.supersample, width = centre.width, height = centre.height;
   const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 1.5 * pixel;
-  cv::Mat laser(height, width, CV_32F);  // every pixel is written
+  laser.create(height, width, CV_32F);  // every pixel is written
   parallelRows(height, [&](const cv::Range& rows) {
     for (int r = rows.start; r < rows.end; ++r) {
       float* out = laser.ptr<float>(r);
@@ -83,7 +84,6 @@ cv::Mat integrateLaser(const Shader& shader, const CentreSamples& centre, double
       }
     }
   });
-  return laser;
 }
 
 }  // namespace
@@ -111,7 +111,7 @@ void RenderConfig::validate() const {
 }
 
 Simulator::Simulator(const SensorConfig& sensor, const RenderConfig& render)
-    : geometry_(sensor), render_(render), pool_(std::make_shared<CentrePool>()) {
+    : geometry_(sensor), render_(render), pool_(std::make_shared<RenderPool>()) {
   render_.validate();
   if (render_.speckle_model == SpeckleModel::Gamma && render_.speckle_contrast > 0)
     gamma_quantiles_ = gammaQuantiles(render_.speckle_contrast);
@@ -148,23 +148,26 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   shader.floor_albedo = &floor_albedo;
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
-  std::unique_ptr<CentreSamples> buffers = pool_->take();
-  const CentreSamples& centre = *buffers;
-  traceCentres(shader, reach, pixel, render_.method, *buffers);
+  std::unique_ptr<RenderBuffers> buffers = pool_->take();
+  const CentreSamples& centre = buffers->centre;
+  traceCentres(shader, reach, pixel, render_.method, buffers->centre);
   lap(spent.centres);
   // 2. Laser light integrated over each pixel near a sheet. With the laser off every pixel has
   // none; integrateLaser() would sample each near pixel n x n, finding no lit neighbours.
-  cv::Mat laser = render_.laser_peak > 0
-                      ? integrateLaser(shader, centre, reach, pixel)
-                      : cv::Mat(centre.height, centre.width, CV_32F, cv::Scalar(0));
+  cv::Mat& laser = buffers->laser;
+  if (render_.laser_peak > 0)
+    integrateLaser(shader, centre, reach, pixel, laser);
+  else
+    laser.create(centre.height, centre.width, CV_32F), laser.setTo(0);
   lap(spent.laser);
   // 3. Laser speckle: multiplicative, spatially correlated over a grain.
   if (render_.noise && render_.speckle_contrast > 0)
-    applySpeckle(laser, centre.near, render_, frame, gamma_quantiles_);
+    applySpeckle(laser, centre.near, render_, frame, gamma_quantiles_, buffers->field,
+                 buffers->blurred);
   // 4. Lens blur, then shot and read noise, saturation and quantization.
   RenderedFrame out;
   cv::add(laser, centre.ambient, laser);
-  out.image = exposeSensor(laser, render_, frame);
+  out.image = exposeSensor(laser, render_, frame, buffers->blurred);
   pool_->give(std::move(buffers));
   lap(spent.noise);
   out.truth = groundTruth(scene, world_from_camera);

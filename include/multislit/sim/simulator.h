@@ -14,7 +14,7 @@
 
 namespace multislit {
 
-class CentrePool;  // the simulator's buffers (private)
+class RenderPool;  // the simulator's buffers (private)
 
 /// How the laser speckle's intensity is distributed (per pixel, mean 1, std speckle_contrast).
 enum class SpeckleModel {
@@ -104,7 +104,7 @@ class Simulator {
   SensorGeometry geometry_;
   RenderConfig render_;
   std::vector<float> gamma_quantiles_;  // SpeckleModel::Gamma: intensity per Gaussian quantile
-  std::shared_ptr<CentrePool> pool_;    // buffers reused from render to render
+  std::shared_ptr<RenderPool> pool_;    // buffers reused from render to render
 };
 
 /// Ground truth as CSV: slit,row,u,x,y,z (camera) ,wx,wy,wz (world),object,height.
