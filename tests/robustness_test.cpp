@@ -33,12 +33,13 @@ const char* kindName(Kind k) {
                             : "screw";
 }
 
-// The object where the slits cross the floor at this pose: the middle of their footprint.
-Scene sceneOf(Kind kind, const Simulator& sim, const Eigen::Isometry3d& world_from_camera) {
+// The object where the slits cross the floor at this pose (`bare`: the bare floor's truth
+// there): the middle of their footprint.
+Scene sceneOf(Kind kind, const std::vector<SlitCrossing>& bare) {
   Scene scene;
   if (kind == Kind::Floor) return scene;
   std::vector<double> xs, ys;
-  for (const SlitCrossing& t : sim.groundTruth(scene, world_from_camera))
+  for (const SlitCrossing& t : bare)
     xs.push_back(t.world_point.x()), ys.push_back(t.world_point.y());
   std::nth_element(xs.begin(), xs.begin() + static_cast<long>(xs.size() / 2), xs.end());
   std::nth_element(ys.begin(), ys.begin() + static_cast<long>(ys.size() / 2), ys.end());
@@ -224,7 +225,8 @@ Tally runVariant(int index, Kind kind, int realization) {
   }
   ref.setNominalScale(sensor, reference_mount);
   const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(mount);
-  Scene scene = sceneOf(kind, sim, pose);
+  const std::vector<SlitCrossing> bare_truth = sim.groundTruth(Scene{}, pose);
+  Scene scene = sceneOf(kind, bare_truth);
   applyPhotometry(photometry, scene);
   const RenderedFrame f = sim.render(scene, pose, static_cast<std::uint64_t>(index));
 
@@ -240,7 +242,7 @@ Tally runVariant(int index, Kind kind, int realization) {
   tally.sigma = floor.sigma;
   std::map<std::pair<int, int>, const SlitCrossing*> truth;
   for (const SlitCrossing& t : f.truth) truth[{t.slit, t.row}] = &t;
-  judgeCrossings(ref, f, *cloud, floor, obstacle_points, sim.groundTruth(Scene{}, pose), &tally);
+  judgeCrossings(ref, f, *cloud, floor, obstacle_points, bare_truth, &tally);
   tally.valid = floor.valid_points;
   for (const PointRDM& p : cloud->points)
     if (std::isfinite(p.dk))

@@ -22,10 +22,10 @@ std::vector<float> gammaQuantiles(double contrast);
 void applySpeckle(cv::Mat& laser, const cv::Mat& lit, const RenderConfig& render, uint64_t frame,
                   const std::vector<float>& gamma_quantiles, cv::Mat& field, cv::Mat& blurred);
 
-/// The camera's image of `irradiance` (CV_32F) [FS]: lens blur, then shot and read noise,
-/// saturation and quantization to render.bit_depth (CV_8U or CV_16U). `blurred` is a buffer (made
-/// by create()), not `irradiance`.
-cv::Mat exposeSensor(const cv::Mat& irradiance, const RenderConfig& render, uint64_t frame,
+/// The camera's image of `sharp`, the irradiance (CV_32F) [FS]: lens blur, then shot and read
+/// noise, saturation and quantization to render.bit_depth (CV_8U or CV_16U). `blurred` is a
+/// buffer (made by create()), not `sharp`.
+cv::Mat exposeSensor(const cv::Mat& sharp, const RenderConfig& render, uint64_t frame,
                      cv::Mat& blurred);
 
 }  // namespace multislit
