@@ -1,6 +1,7 @@
 #include "multislit/sim/simulator.h"
 
 #include "sim/image_noise.h"
+#include "sim/laser_integral.h"
 #include "sim/object_bounds.h"
 #include "sim/parallel_rows.h"
 #include "sim/pixel_centres.h"
@@ -19,9 +20,6 @@
 namespace multislit {
 namespace {
 
-// Beyond this many of its sigmas from its centre a sheet adds < 4e-5 of its peak.
-constexpr double kSheetSigmas = 4.5;
-
 // How far from a sheet's centre [rad] light is traced: kSheetSigmas for the widest sheet on any
 // surface, and two pixels more.
 double sheetReach(const Scene& scene, double sigma, double pixel) {
@@ -29,61 +27,6 @@ double sheetReach(const Scene& scene, double sigma, double pixel) {
   for (std::size_t k = 0; k < scene.objects.size(); ++k)
     widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
   return kSheetSigmas * sigma * widest + 2 * pixel;
-}
-
-// Whether the sheet's offset is linear over pixel (r, c): the same surface and slit, lit, not at
-// the slit's end (|t| <= t_inner) on the pixel and its four neighbours, and no curvature.
-inline bool offsetIsLinear(const CentreSamples& centre, int r, int c, double t_inner,
-                           double sigma) {
-  if (r < 1 || c < 1 || r >= centre.height - 1 || c >= centre.width - 1) return false;
-  const Shader::Sample& m = centre.at(r, c);
-  for (const Shader::Sample* q :
-       {&centre.at(r, c - 1), &centre.at(r, c + 1), &centre.at(r - 1, c), &centre.at(r + 1, c), &m})
-    if (q->object != m.object || q->slit != m.slit || !(q->radiance > 0) ||
-        std::abs(q->t) > t_inner)
-      return false;
-  return std::abs(centre.at(r, c - 1).offset + centre.at(r, c + 1).offset - 2 * m.offset) <
-             0.02 * sigma &&
-         std::abs(centre.at(r - 1, c).offset + centre.at(r + 1, c).offset - 2 * m.offset) <
-             0.02 * sigma;
-}
-
-// Laser light integrated over each pixel near a sheet: exactly where the sheet's offset is
-// linear over the pixel (same surface and slit, lit, not at the slit's end; none where the whole
-// pixel lies beyond kSheetSigmas of its sheet), else sampled at n x n sub-pixel positions (edges,
-// shadows, slit ends).
-void integrateLaser(const Shader& shader, const CentreSamples& centre, double reach, double pixel,
-                    cv::Mat& laser) {
-  const int n = shader.render.supersample, width = centre.width, height = centre.height;
-  const double sigma = shader.sigma, t_inner = shader.geometry.slitTMax() - 1.5 * pixel;
-  laser.create(height, width, CV_32F);  // every pixel is written
-  parallelRows(height, [&](const cv::Range& rows) {
-    for (int r = rows.start; r < rows.end; ++r) {
-      float* out = laser.ptr<float>(r);
-      const uchar* near = centre.near.ptr<uchar>(r);
-      for (int c = 0; c < width; ++c) {
-        out[c] = 0;
-        if (!near[c]) continue;
-        const Shader::Sample& m = centre.at(r, c);
-        double value = 0;
-        if (offsetIsLinear(centre, r, c, t_inner, sigma)) {
-          const double gu = 0.5 * (centre.at(r, c + 1).offset - centre.at(r, c - 1).offset);
-          const double gv = 0.5 * (centre.at(r + 1, c).offset - centre.at(r - 1, c).offset);
-          const double sheet = sigma * m.width;
-          // The offset nearest the sheet on the pixel: its centre's less half its spread.
-          if (std::abs(m.offset) - 0.5 * (std::abs(gu) + std::abs(gv)) <= kSheetSigmas * sheet)
-            value = m.radiance * pixelMeanOfGaussian(m.offset, gu, gv, sheet);
-        } else {
-          for (int j = 0; j < n; ++j)
-            for (int i = 0; i < n; ++i)
-              value += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n,
-                                                 reach, m.object, m.albedo));
-          value /= n * n;
-        }
-        out[c] = static_cast<float>(value);
-      }
-    }
-  });
 }
 
 }  // namespace
@@ -156,7 +99,7 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
   // none; integrateLaser() would sample each near pixel n x n, finding no lit neighbours.
   cv::Mat& laser = buffers->laser;
   if (render_.laser_peak > 0)
-    integrateLaser(shader, centre, reach, pixel, laser);
+    integrateLaser(shader, centre, reach, laser);
   else
     laser.create(centre.height, centre.width, CV_32F), laser.setTo(0);
   lap(spent.laser);
