@@ -29,6 +29,45 @@ double sheetReach(const Scene& scene, double sigma, double pixel) {
   return kSheetSigmas * sigma * widest + 2 * pixel;
 }
 
+// The crossings of one slit of the ground truth (Simulator::groundTruth).
+std::vector<SlitCrossing> slitTruth(const SensorGeometry& geometry, const Scene& scene,
+                                    const Eigen::Isometry3d& world_from_camera, int slit) {
+  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
+  const Eigen::Vector3d camera_centre = world_from_camera.translation();
+  const Eigen::Vector3d projector_centre = world_from_camera * geometry.projectorCentre();
+  const int width = geometry.config().camera.width;
+  std::vector<SlitCrossing> truth;
+  const auto [first, last] = geometry.slitRows(slit);
+  for (int row = first; row <= last; ++row) {
+    // The light on row `row` comes from one ray of the slit, whatever the depth.
+    const std::optional<double> t = geometry.slitParamForRow(slit, row);
+    if (!t) continue;
+    const Eigen::Vector3d dir =
+        (world_from_camera.linear() * geometry.slitRay(slit, *t)).normalized();
+    const Hit hit = scene.intersect(projector_centre, dir);
+    if (!hit.valid() || hit.normal.dot(dir) >= 0) continue;
+    const Eigen::Vector3d point_w = projector_centre + hit.distance * dir;
+    const Eigen::Vector3d point_c = camera_from_world * point_w;
+    if (point_c.z() <= 0) continue;
+    const Eigen::Vector3d to_point = point_w - camera_centre;
+    const double range = to_point.norm();
+    const Hit seen = scene.intersect(camera_centre, to_point / range, range * (1.0 - 1e-9));
+    if (seen.valid()) continue;  // hidden from the camera
+    const Eigen::Vector2d uv = geometry.project(point_c);
+    if (uv.x() < 0 || uv.x() > width - 1) continue;
+    SlitCrossing x;
+    x.slit = slit;
+    x.row = row;
+    x.u = uv.x();
+    x.camera_point = point_c;
+    x.world_point = point_w;
+    x.object = hit.object;
+    x.height = point_w.z();
+    truth.push_back(x);
+  }
+  return truth;
+}
+
 }  // namespace
 
 void RenderConfig::validate() const {
@@ -109,7 +148,10 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
                  buffers->blurred);
   // 4. Lens blur, then shot and read noise, saturation and quantization.
   RenderedFrame out;
-  cv::add(laser, centre.ambient, laser);
+  parallelRows(laser.rows, [&](const cv::Range& rows) {
+    cv::Mat band = laser.rowRange(rows);
+    cv::add(band, centre.ambient.rowRange(rows), band);
+  });
   out.image = exposeSensor(laser, render_, frame, buffers->blurred);
   pool_->give(std::move(buffers));
   lap(spent.noise);
@@ -121,41 +163,16 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
 
 std::vector<SlitCrossing> Simulator::groundTruth(const Scene& scene,
                                                  const Eigen::Isometry3d& world_from_camera) const {
-  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
-  const Eigen::Vector3d camera_centre = world_from_camera.translation();
-  const Eigen::Vector3d projector_centre = world_from_camera * geometry_.projectorCentre();
-  const int width = geometry_.config().camera.width;
+  // Each slit's crossings on OpenCV's threads, then in slit order.
+  std::vector<std::vector<SlitCrossing>> of_slit(static_cast<std::size_t>(geometry_.slitCount()));
+  parallelRows(geometry_.slitCount(), [&](const cv::Range& slits) {
+    for (int slit = slits.start; slit < slits.end; ++slit)
+      of_slit[static_cast<std::size_t>(slit)] =
+          slitTruth(geometry_, scene, world_from_camera, slit);
+  });
   std::vector<SlitCrossing> truth;
-  for (int slit = 0; slit < geometry_.slitCount(); ++slit) {
-    const auto [first, last] = geometry_.slitRows(slit);
-    for (int row = first; row <= last; ++row) {
-      // The light on row `row` comes from one ray of the slit, whatever the depth.
-      const std::optional<double> t = geometry_.slitParamForRow(slit, row);
-      if (!t) continue;
-      const Eigen::Vector3d dir =
-          (world_from_camera.linear() * geometry_.slitRay(slit, *t)).normalized();
-      const Hit hit = scene.intersect(projector_centre, dir);
-      if (!hit.valid() || hit.normal.dot(dir) >= 0) continue;
-      const Eigen::Vector3d point_w = projector_centre + hit.distance * dir;
-      const Eigen::Vector3d point_c = camera_from_world * point_w;
-      if (point_c.z() <= 0) continue;
-      const Eigen::Vector3d to_point = point_w - camera_centre;
-      const double range = to_point.norm();
-      const Hit seen = scene.intersect(camera_centre, to_point / range, range * (1.0 - 1e-9));
-      if (seen.valid()) continue;  // hidden from the camera
-      const Eigen::Vector2d uv = geometry_.project(point_c);
-      if (uv.x() < 0 || uv.x() > width - 1) continue;
-      SlitCrossing x;
-      x.slit = slit;
-      x.row = row;
-      x.u = uv.x();
-      x.camera_point = point_c;
-      x.world_point = point_w;
-      x.object = hit.object;
-      x.height = point_w.z();
-      truth.push_back(x);
-    }
-  }
+  for (const std::vector<SlitCrossing>& crossings : of_slit)
+    truth.insert(truth.end(), crossings.begin(), crossings.end());
   return truth;
 }
 
