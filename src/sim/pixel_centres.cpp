@@ -133,23 +133,27 @@ class FloorRow {
   }
 
   /// at() and RowOut::finish() of columns [first, end), no object on their rays. Most lie far
-  /// from every sheet (beyond `lit`), where at() lights nothing and finish() finds the pixel far:
-  /// their samples, ambient light and flags in plain loops first, then at() where it is needed.
+  /// from every sheet (beyond `lit`), where at() lights nothing: their sample in one store.
   void run(int first, int end, double lit, const RowOut& out) const {
-    if (!(shader_.camera_centre.z() > 0) || glossy_) {
-      for (int c = first; c < end; ++c) {
-        at(c, lit, out.samples[c]);
-        out.finish(static_cast<std::size_t>(c));
-      }
-      return;
-    }
-    if (end > first) farColumns(first, end, out.light, out);
+    const bool sky = !(shader_.camera_centre.z() > 0);
     for (int c = first; c < end; ++c) {
       const auto k = static_cast<std::size_t>(c);
-      if (!(depth_[k] < 0) || !(std::abs(offset_[k]) > lit)) {
+      const double offset = offset_[k];
+      if (sky || !(depth_[k] < 0) || glossy_ || !(std::abs(offset) > lit)) {
         at(c, lit, out.samples[k]);
         out.finish(k);
+        continue;
       }
+      Shader::Sample s;
+      s.object = 0;
+      s.slit = static_cast<std::int16_t>(slit_[k]);
+      s.t = static_cast<float>(y_[k]);
+      s.offset = offset;
+      s.albedo = static_cast<float>(albedo_row_[k]);
+      s.radiance = s.glare = 0;
+      s.width = 1;
+      out.samples[k] = s;
+      out.finish(k);
     }
   }
 
@@ -167,27 +171,6 @@ class FloorRow {
   }
 
  private:
-  // Columns [first, end) as if far from every sheet on the floor: the sample of at() and what
-  // finish() makes of it (the ambient light of the albedo, not near).
-  void farColumns(int first, int end, double light, const RowOut& out) const {
-    for (int c = first; c < end; ++c) {
-      const auto k = static_cast<std::size_t>(c);
-      Shader::Sample& s = out.samples[k];
-      s.object = 0;
-      s.slit = static_cast<std::int16_t>(slit_[k]);
-      s.t = static_cast<float>(y_[k]);
-      s.offset = offset_[k];
-      s.albedo = static_cast<float>(albedo_row_[k]);
-      s.radiance = s.glare = 0;
-      s.width = 1;
-    }
-    const double* albedo = albedo_row_.data();
-    float* ambient = out.ambient;
-    for (int c = first; c < end; ++c)
-      ambient[c] = static_cast<float>(light * static_cast<float>(albedo[c]));
-    std::fill(out.near + first, out.near + end, uchar{0});
-  }
-
   const Shader& shader_;
   const FloorAlbedo& albedo_;
   bool glossy_ = shader_.scene.floor.gloss > 0;
