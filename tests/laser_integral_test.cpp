@@ -52,10 +52,7 @@ EndErrors endErrors(const Scenario& s, std::uint64_t frame) {
   shader.casters = &casters;
   const FloorAlbedo albedo(s.scene.floor, floorInView(shader));
   shader.floor_albedo = &albedo;
-  double widest = s.scene.stripeWidth(0);
-  for (std::size_t k = 0; k < s.scene.objects.size(); ++k)
-    widest = std::max(widest, s.scene.stripeWidth(static_cast<int>(k) + 1));
-  const double reach = kSheetSigmas * sigma * widest + 2 * pixel;
+  const double reach = sheetReach(s.scene, sigma, pixel);
   CentreSamples centre;
   traceCentres(shader, reach, pixel, RenderMethod::Culled, centre);
   cv::Mat laser;

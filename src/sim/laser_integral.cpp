@@ -2,6 +2,7 @@
 
 #include "sim/parallel_rows.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace multislit {
@@ -92,6 +93,13 @@ double pixelLaser(const Shader& shader, const CentreSamples& centre, int r, int 
 }
 
 }  // namespace
+
+double sheetReach(const Scene& scene, double sigma, double pixel) {
+  double widest = scene.stripeWidth(0);
+  for (std::size_t k = 0; k < scene.objects.size(); ++k)
+    widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
+  return kSheetSigmas * sigma * widest + 2 * pixel;
+}
 
 void integrateLaser(const Shader& shader, const CentreSamples& centre, double reach,
                     cv::Mat& laser) {

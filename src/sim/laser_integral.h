@@ -5,12 +5,19 @@
 #include "sim/pixel_centres.h"
 #include "sim/shader.h"
 
+#include "multislit/sim/scene.h"
+
 #include <opencv2/core/mat.hpp>
 
 namespace multislit {
 
 /// Beyond this many of its sigmas from its centre a sheet adds < 4e-5 of its peak.
 inline constexpr double kSheetSigmas = 4.5;
+
+/// How far from a sheet's centre [rad] light is traced: kSheetSigmas for the widest sheet on any
+/// surface of `scene` (sheets of width `sigma` [rad] before the surface's factor), and two
+/// pixels (of `pixel` [rad]) more.
+double sheetReach(const Scene& scene, double sigma, double pixel);
 
 /// The laser's light on each pixel into `laser` (CV_32F, made by create()): 0 where
 /// `centre.near` is not set. Where the sheet's offset and the position along the slit are

@@ -20,15 +20,6 @@
 namespace multislit {
 namespace {
 
-// How far from a sheet's centre [rad] light is traced: kSheetSigmas for the widest sheet on any
-// surface, and two pixels more.
-double sheetReach(const Scene& scene, double sigma, double pixel) {
-  double widest = scene.stripeWidth(0);
-  for (std::size_t k = 0; k < scene.objects.size(); ++k)
-    widest = std::max(widest, scene.stripeWidth(static_cast<int>(k) + 1));
-  return kSheetSigmas * sigma * widest + 2 * pixel;
-}
-
 // The crossings of one slit of the ground truth (Simulator::groundTruth).
 std::vector<SlitCrossing> slitTruth(const SensorGeometry& geometry, const Scene& scene,
                                     const Eigen::Isometry3d& world_from_camera, int slit) {
