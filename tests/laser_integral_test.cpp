@@ -22,17 +22,6 @@ using namespace multislit;
 
 namespace {
 
-// The mean laser light of pixel (c, r) over n x n traced rays, as the renderer traces them.
-double tracedMean(const Shader& shader, const Shader::Sample& m, int c, int r, double reach,
-                  int n) {
-  double sum = 0;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      sum += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n, reach,
-                                       m.object, m.albedo));
-  return sum / (n * n);
-}
-
 struct EndErrors {
   int pixels = 0;                         // lit pixels within 3 px of a slit's end
   double integrated = 0, traced_4x4 = 0;  // mean |error| against 16 x 16 rays [of the peak]
@@ -65,10 +54,10 @@ EndErrors endErrors(const Scenario& s, std::uint64_t frame) {
     for (int c = 1; c + 1 < centre.width; ++c) {
       const Shader::Sample& m = centre.at(r, c);
       if (!centre.near.at<uchar>(r, c) || std::abs(std::abs(m.t) - t_max) > 3 * pixel) continue;
-      const double truth = tracedMean(shader, m, c, r, reach, 16);
+      const double truth = tracedPixelMean(shader, m, c, r, reach, 16);
       if (truth < 1e-3 * peak && laser.at<float>(r, c) < 1e-3 * peak) continue;
       const double ours = std::abs(laser.at<float>(r, c) - truth) / peak,
-                   old = std::abs(tracedMean(shader, m, c, r, reach, 4) - truth) / peak;
+                   old = std::abs(tracedPixelMean(shader, m, c, r, reach, 4) - truth) / peak;
       ++e.pixels;
       e.integrated += ours, e.traced_4x4 += old;
       e.worst_integrated = std::max(e.worst_integrated, ours);

@@ -84,15 +84,20 @@ double pixelLaser(const Shader& shader, const CentreSamples& centre, int r, int 
       return sheet.radiance * pixelMeanOfGaussian(sheet.offset, sheet.gu, sheet.gv, profile);
     if (sheet.radiance > 0) return sheet.radiance * meanWithinSlit(sheet, t_max, profile, n);
   }
-  double value = 0;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      value += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n, reach,
-                                         m.object, m.albedo));
-  return value / (n * n);
+  return tracedPixelMean(shader, m, c, r, reach, n);
 }
 
 }  // namespace
+
+double tracedPixelMean(const Shader& shader, const Shader::Sample& centre, int c, int r,
+                       double reach, int n) {
+  double sum = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      sum += shader.laser(shader.trace(c - 0.5 + (i + 0.5) / n, r - 0.5 + (j + 0.5) / n, reach,
+                                       centre.object, centre.albedo));
+  return sum / (n * n);
+}
 
 double sheetReach(const Scene& scene, double sigma, double pixel) {
   double widest = scene.stripeWidth(0);

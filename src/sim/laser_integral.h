@@ -19,6 +19,12 @@ inline constexpr double kSheetSigmas = 4.5;
 /// pixels (of `pixel` [rad]) more.
 double sheetReach(const Scene& scene, double sigma, double pixel);
 
+/// The laser's light on pixel (c, r) traced at n x n positions of it, within `reach` [rad] of a
+/// sheet; `centre` is the pixel centre's sample, whose surface and albedo the rays that meet the
+/// same surface take (the floor's grain is many pixels wide).
+double tracedPixelMean(const Shader& shader, const Shader::Sample& centre, int c, int r,
+                       double reach, int n);
+
 /// The laser's light on each pixel into `laser` (CV_32F, made by create()): 0 where
 /// `centre.near` is not set. Where the sheet's offset and the position along the slit are
 /// linear over the pixel (one surface and slit on it and its four neighbours, lit except beyond
