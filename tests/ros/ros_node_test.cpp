@@ -68,8 +68,16 @@ TEST(RosNode, PublishesTheOrganizedRdmapWithEveryField) {
 TEST(RosNode, StampsEveryMessageWithItsFramesStamp) {
   const std::vector<ros::Time> stamps = cloudStamps();
   ASSERT_EQ(stamps.size(), options().frames);
-  for (std::size_t i = 1; i < stamps.size(); ++i)  // paced at 30 Hz: at least a period apart
-    EXPECT_GE((stamps[i] - stamps[i - 1]).toSec(), 1.0 / options().fps - 0.002) << "frame " << i;
+  // Paced at 30 Hz: each frame is taken when it is due or later, on a fixed schedule, so a frame
+  // the machine delayed does not delay the next and two stamps may be closer than a period. In
+  // order, and a period apart as the median gap.
+  std::vector<double> gaps;
+  for (std::size_t i = 1; i < stamps.size(); ++i) {
+    EXPECT_GT(stamps[i], stamps[i - 1]) << "frame " << i;
+    gaps.push_back((stamps[i] - stamps[i - 1]).toSec());
+  }
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  EXPECT_GE(gaps[gaps.size() / 2], 0.9 / options().fps);
   const auto same = [&](const auto& inbox) {
     std::vector<ros::Time> got;
     for (const auto& item : inbox.items) got.push_back(item.message->header.stamp);
