@@ -1,7 +1,8 @@
 # CTest "downstream_package": installs the built project into a prefix inside the build tree,
 # then configures, builds and runs tests/downstream against that install.
 #   cmake -DPROJECT_BINARY_DIR=... -DDOWNSTREAM_SOURCE_DIR=... -DWORK_DIR=... -DGENERATOR=...
-#         -DC_COMPILER=... -DCXX_COMPILER=... -DBUILD_TYPE=... [-DSANITIZE_FLAGS=...]
+#         -DC_COMPILER=... -DCXX_COMPILER=... -DBUILD_TYPE=... [-DBUILD_TYPE_FLAGS=...]
+#         [-DSANITIZE_FLAGS=...]
 #         -P downstream_package.cmake
 cmake_minimum_required(VERSION 3.22)
 
@@ -28,6 +29,10 @@ run(install ${CMAKE_COMMAND} --install ${PROJECT_BINARY_DIR} --prefix ${prefix})
 set(flags)
 if(SANITIZE_FLAGS)
   set(flags "-DCMAKE_CXX_FLAGS=${SANITIZE_FLAGS}")
+endif()
+if(BUILD_TYPE AND BUILD_TYPE_FLAGS)
+  string(TOUPPER "${BUILD_TYPE}" type)
+  list(APPEND flags "-DCMAKE_CXX_FLAGS_${type}=${BUILD_TYPE_FLAGS}")
 endif()
 run(configure ${CMAKE_COMMAND} -S ${DOWNSTREAM_SOURCE_DIR} -B ${build} -G ${GENERATOR}
     -DCMAKE_BUILD_TYPE=${BUILD_TYPE} -DCMAKE_C_COMPILER=${C_COMPILER}
