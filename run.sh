@@ -13,7 +13,7 @@ set -euo pipefail
 DEMO=(build/multislit walk --out out/walk)
 
 PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev libaravis-dev
-  libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format
+  libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format lld
   # Debian's ROS 1, for the node apps/ros and its test: roscpp, TF, the messages, gencpp with
   # std_msgs' .msg files, roscore and roslaunch, rosbag record and info
   libroscpp-dev libtf2-ros-dev libpcl-conversions-dev libsensor-msgs-dev libvisualization-msgs-dev
