@@ -73,7 +73,7 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   });
 }
 
-void Extractor::finish(const cv::Mat& image, const Task& t, double centre,
+bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
                        const ProfileParams& params, PointRDM* p) const {
   if (config_.across_stripe) {
     AcrossStripe across;  // the row's tests, applied to the columns' profiles
@@ -83,15 +83,18 @@ void Extractor::finish(const cv::Mat& image, const Task& t, double centre,
     across.half_rows = acrossHalfRows(params.half_window, t.slope);
     acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
   }
+  // The image spans columns -0.5 to cols - 0.5 (pixel centres at whole numbers).
+  if (!(centre > -0.5 && centre < image.cols - 0.5)) return false;
   p->dk = static_cast<float>(centre - t.u);
-  if (!std::isfinite(t.u_inf)) return;
+  if (!std::isfinite(t.u_inf)) return true;
   const MetricScale& scale = reference_.scale;
   const double depth = scale.disparity_constant / (centre - t.u_inf);
-  if (!(depth > 0)) return;
+  if (!(depth > 0)) return true;
   const double depth_per_px = depth / scale.f;
   p->x = static_cast<float>((centre - scale.cx) * depth_per_px);
   p->y = static_cast<float>((t.row - scale.cy) * depth_per_px);
   p->z = static_cast<float>(depth);
+  return true;
 }
 
 template <typename T>
@@ -123,8 +126,7 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
     measurePeaks(regions, n, image.cols, params, peaks, found);
     for (std::size_t i = 0; i < n; ++i) {
       if (!found[i]) continue;
-      finish(image, tasks[i], peaks[i].centre, params, &points[tasks[i].cell]);
-      ++stats.valid;
+      if (finish(image, tasks[i], peaks[i].centre, params, &points[tasks[i].cell])) ++stats.valid;
     }
   }
 }

@@ -76,8 +76,9 @@ class Extractor {
   };
 
   /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
-  /// (ExtractorConfig::across_stripe), then dk and, with a metric scale, x, y, z.
-  void finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
+  /// (ExtractorConfig::across_stripe), then dk and, with a metric scale, x, y, z. False, and `p`
+  /// left unmeasured, when the centre lies beyond the image's edge (a fit pulled past it).
+  bool finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
               PointRDM* p) const;
   template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
