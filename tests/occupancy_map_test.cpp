@@ -162,7 +162,7 @@ TEST(OccupancyMap, MemoryStaysBoundedOver10000Frames) {
   std::size_t most = 0, at_1000 = 0;
   const auto t0 = std::chrono::steady_clock::now();
   const int frames =
-      frameCount(10000, 2500);  // under the sanitizers: 12.5 m, a third of the circle
+      frameCount(10000, 2500);  // under the sanitizers: 12.5 m, two fifths of the circle
   for (int k = 0; k < frames; ++k) {
     const double angle = 0.005 * k / 5.0;
     const Pose2D body{5.0 * std::sin(angle), 5.0 * (1 - std::cos(angle)), angle};
