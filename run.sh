@@ -14,6 +14,7 @@ DEMO=(build/multislit walk --out out/walk)
 
 PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev libaravis-dev
   libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format lld
+  ninja-build
   # Debian's ROS 1, for the node apps/ros and its test: roscpp, TF, the messages, gencpp with
   # std_msgs' .msg files, roscore and roslaunch, rosbag record and info
   libroscpp-dev libtf2-ros-dev libpcl-conversions-dev libsensor-msgs-dev libvisualization-msgs-dev
@@ -22,6 +23,9 @@ PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev liba
 
 cd "$(dirname "${BASH_SOURCE[0]}")"
 JOBS=$(nproc)
+# CTest runs one test more than there are cores: the camera tests spend much of their time waiting
+# on timeouts (a camera that stops, a frame that never comes), and the third test uses that time.
+TEST_JOBS=$((JOBS + 1))
 
 usage() {
   echo "usage: bash run.sh demo | test | tsan | fuzz [SECONDS]" >&2
@@ -91,6 +95,10 @@ configure_and_build() {
   done
   (($#)) && shift
   configure_args=("$@")
+  # Ninja for a new build tree (10-14 s less than Make per tree); a tree made before keeps its own.
+  if [[ ! -f $dir/CMakeCache.txt ]] && command -v ninja >/dev/null; then
+    configure_args=(-G Ninja "${configure_args[@]}")
+  fi
   cmake -S . -B "$dir" "${configure_args[@]}"
   cmake --build "$dir" -j"$JOBS" "${build_args[@]}"
 }
@@ -134,12 +142,12 @@ run_tests() {
   section "building"
   configure_and_build build -- -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=ON
   section "testing (release)"
-  ctest --test-dir build --output-on-failure -j2 || failed+=("release")
+  ctest --test-dir build --output-on-failure -j"$TEST_JOBS" || failed+=("release")
   section "building (ASan+UBSan)"
   configure_and_build build-asan -- -DMULTISLIT_SANITIZE=ON "${SANITIZED_BUILD[@]}"
   section "testing (ASan+UBSan)"
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build-asan --output-on-failure -j2 || failed+=("ASan+UBSan")
+    ctest --test-dir build-asan --output-on-failure -j"$TEST_JOBS" || failed+=("ASan+UBSan")
   print_times
   if ((${#failed[@]})); then
     echo "== FAILED: tests of ${failed[*]}" >&2
@@ -159,7 +167,7 @@ run_tsan() {
   section "testing (TSan)"
   local status=0
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$(pwd)/tests/tsan.supp" \
-    ctest --test-dir build-tsan --output-on-failure --no-tests=error -j2 -L tsan || status=$?
+    ctest --test-dir build-tsan --output-on-failure --no-tests=error -j"$TEST_JOBS" -L tsan || status=$?
   print_times
   if ((status)); then
     echo "== FAILED: tests under ThreadSanitizer" >&2

@@ -64,6 +64,10 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
                   o.centroid.z(), world.x(), world.y(), o.length, o.width, o.height, o.distance);
     groups_csv_ << line;
   }
+  // Whole rows reach the files each frame, groups first: `tail -f decisions.csv` follows a live
+  // run, and a row read there has its groups in obstacles.csv already.
+  groups_csv_.flush();
+  frames_csv_.flush();
   ++frames_;
   groups_ += groups.size();
   no_floor_ += !r.floor.found;
