@@ -69,8 +69,8 @@ std_msgs::Header Node::header(const ros::Time& stamp, const std::string& frame) 
 
 void Node::waitForSubscribers() const {
   if (config_.wait_for_subscribers == 0) return;
-  const std::vector<const ros::Publisher*> topics = {&rdmap_,   &floor_,    &obstacles_, &markers_,
-                                                     &octomap_, &occupied_, &decision_};
+  const std::vector<const ros::Publisher*> topics = {
+      &rdmap_, &floor_, &obstacles_, &markers_, &octomap_, &occupied_, &decision_, &diagnostics_};
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(config_.wait_timeout);
   const auto missing = [&] {
     std::string names;
