@@ -167,7 +167,7 @@ run_tsan() {
   section "testing (TSan)"
   local status=0
   TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$(pwd)/tests/tsan.supp" \
-    ctest --test-dir build-tsan --output-on-failure --no-tests=error -j"$TEST_JOBS" -L tsan || status=$?
+    ctest --test-dir build-tsan --output-on-failure --no-tests=error -j"$JOBS" -L tsan || status=$?
   print_times
   if ((status)); then
     echo "== FAILED: tests under ThreadSanitizer" >&2
