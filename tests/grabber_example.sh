@@ -107,6 +107,11 @@ wait $example
 rc=$?
 example=
 [[ $rc == 130 ]] || fail "the example after Ctrl-C: rc $rc, not 130: $(tail -3 run.log)"
-grep -q "reconnects 1" run.log || fail "no reconnect counted: $(tail -3 run.log)"
+# Every loss ends in a reconnect, and the summary counts them. On a busy machine the camera that
+# came back can miss a second too and be lost and reopened again: more than one is no error.
+losses=$(grep -c "^status: GigE Vision camera 127.0.0.1 lost (loss" run.log)
+backs=$(grep -c "^status: GigE Vision camera 127.0.0.1 is back (reconnect" run.log)
+((losses >= 1 && backs == losses)) || fail "$losses losses, $backs reconnects: $(tail -3 run.log)"
+grep -q "reconnects $backs," run.log || fail "the summary does not count $backs reconnects: $(tail -3 run.log)"
 echo "camera killed and back: $(grep '^status' run.log | tr '\n' ';') $(grep '^[0-9]* clouds;' run.log)"
 echo "grabber_example: all checks passed"
