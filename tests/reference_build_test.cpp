@@ -81,10 +81,43 @@ TEST(ReferenceBuild, AStrayPieceAtASlitsEndDoesNotBendTheSlit) {
   EXPECT_LT(quantile(e.all, 0.99), 0.5);
 }
 
+// A grout line running along a stripe moves its centre by pixels over a hundred rows or more, and
+// that slit's own polynomial follows it; the other slits of the pattern show where it lies
+// (slit_pattern.h). Over the nine tiled floors of the 40 random photometries whose speckle is
+// under 0.3 (one image each, at the reference pose), the rows more than 0.5 px off fell from 704
+// of 39 079 (1.8 %) to 177 of 38 933 (0.45 %) when the pattern judged the slits' centres, the
+// 99th percentile of the error from 0.97 to 0.37 px (variant 15: 308 to 151 rows, 36: 206 to
+// none; under the sanitizers, which build only those two, 514 of 8768 to 151 of 8758).
+TEST(ReferenceBuild, AStretchPulledAlongAGroutLineIsHeldByTheOtherSlits) {
+  std::size_t beyond = 0, rows = 0;
+  std::vector<double> all;
+  for (const int variant : {9, 10, 15, 26, 28, 31, 34, 36, 38}) {
+    if (kSanitized && variant != 36 && variant != 15) continue;
+    std::vector<SlitCrossing> truth;
+    const ReferenceErrors e =
+        errorsOf(Reference::fromImage(floorImages(variant, 1, &truth)[0]), truth);
+    std::printf("variant %d: rows beyond 0.5 px %zu of %zu, p99 %.3f px\n", variant, e.beyond(0.5),
+                e.all.size(), quantile(e.all, 0.99));
+    beyond += e.beyond(0.5), rows += e.all.size();
+    all.insert(all.end(), e.all.begin(), e.all.end());
+    if (variant == 36) {
+      EXPECT_EQ(e.beyond(0.5), 0u);
+    }
+  }
+  std::printf("tiles: rows beyond 0.5 px %zu of %zu, p99 %.3f px\n", beyond, rows,
+              quantile(all, 0.99));
+  EXPECT_LE(beyond * 100, rows * (kSanitized ? 3 : 1));
+  if (!kSanitized) {
+    EXPECT_LT(quantile(all, 0.99), 0.5);
+  }
+}
+
 // A grout line or grain running along a stripe moves its centre over dozens of rows, and one
-// reference image carries that into every frame measured with it. Five references at other spots
-// of the floor average the texture out: measured, the rows more than 0.5 px off fall from 308 to
-// 85 (variant 15, tiles), 206 to 3 (36, tiles) and 1341 to 66 (0, tiles under strong speckle).
+// reference image carries what the pattern does not hold into every frame measured with it. Five
+// references at other spots of the floor average the texture out: measured, the rows more than
+// 0.5 px off fall from 151 to 72 (variant 15, tiles) and 1229 to none (0, tiles under strong
+// speckle); on variant 36 (tiles) none is off with one image or five. Before the pattern judged
+// the slits: 308 to 85, 1341 to 66 and 206 to 3.
 TEST(ReferenceBuild, ReferencesAtSeveralSpotsOfATexturedFloorAverageItOut) {
   for (const int variant : {15, 36, 0}) {
     if (kSanitized && variant != 36) continue;
@@ -94,7 +127,7 @@ TEST(ReferenceBuild, ReferencesAtSeveralSpotsOfATexturedFloorAverageItOut) {
     const ReferenceErrors five = errorsOf(Reference::fromImages(images), truth);
     std::printf("variant %d: rows beyond 0.5 px %zu of %zu from one image, %zu of %zu from five\n",
                 variant, one.beyond(0.5), one.all.size(), five.beyond(0.5), five.all.size());
-    EXPECT_LE(five.beyond(0.5) * 3, one.beyond(0.5)) << "variant " << variant;
+    EXPECT_LE(five.beyond(0.5) * 2, one.beyond(0.5)) << "variant " << variant;
     EXPECT_GE(five.all.size() * 100, one.all.size() * 99) << "variant " << variant;
   }
 }
