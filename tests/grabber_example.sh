@@ -107,11 +107,15 @@ wait $example
 rc=$?
 example=
 [[ $rc == 130 ]] || fail "the example after Ctrl-C: rc $rc, not 130: $(tail -3 run.log)"
-# Every loss ends in a reconnect, and the summary counts them. On a busy machine the camera that
-# came back can miss a second too and be lost and reopened again: more than one is no error.
+# Every loss ends in a reconnect, but for one the Ctrl-C may cut short, and the summary counts the
+# reconnects. On a busy machine the camera that came back can miss a second too and be lost and
+# reopened again, or lost once more just before the Ctrl-C: neither is an error.
 losses=$(grep -c "^status: GigE Vision camera 127.0.0.1 lost (loss" run.log)
 backs=$(grep -c "^status: GigE Vision camera 127.0.0.1 is back (reconnect" run.log)
-((losses >= 1 && backs == losses)) || fail "$losses losses, $backs reconnects: $(tail -3 run.log)"
+pending=0
+[[ $(grep "^status: GigE Vision camera 127.0.0.1" run.log | tail -1) == *"lost (loss"* ]] && pending=1
+((losses >= 1 && backs >= 1 && backs + pending == losses)) ||
+  fail "$losses losses, $backs reconnects: $(tail -3 run.log)"
 grep -q "reconnects $backs," run.log || fail "the summary does not count $backs reconnects: $(tail -3 run.log)"
 echo "camera killed and back: $(grep '^status' run.log | tr '\n' ';') $(grep '^[0-9]* clouds;' run.log)"
 echo "grabber_example: all checks passed"
