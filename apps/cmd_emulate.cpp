@@ -119,10 +119,12 @@ std::size_t autoAhead(const CameraEmulator& camera, double fps, std::size_t limi
   const auto ahead = static_cast<std::size_t>(
       std::min(std::ceil(1.5 * kWalkFrames * short_by), static_cast<double>(kWalkFrames)) +
       CameraEmulator::kDefaultAhead);
+  const std::streamsize precision = std::cout.precision();
   std::cout << std::fixed << std::setprecision(1) << "an image takes " << 1e3 * made_s
             << " ms to make, the camera sends one every " << 1e3 / fps << " ms: " << ahead
             << " images ahead for the walk's " << kWalkFrames << " frames";
   std::cout.unsetf(std::ios::floatfield);
+  std::cout.precision(precision);  // the fps and seconds printed later keep their digits
   if (ahead > limit) std::cout << " (only " << limit << " fit in 2 GiB)";
   std::cout << "\n" << std::flush;
   return std::min(ahead, limit);
