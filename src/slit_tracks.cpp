@@ -1,25 +1,23 @@
 #include "slit_tracks.h"
-#include "slit_pattern.h"
 
 #include "full_scale.h"
 #include "slit_course.h"
+#include "slit_fit.h"
+#include "slit_pattern.h"
 #include "slit_selection.h"
 #include "stripe_across.h"
 
-#include <Eigen/Dense>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 namespace multislit {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kFwhmPerSigma = 2.3548;
 
 /// The image as float with every row smoothed by a Gaussian of `sigma` [px] along the row only:
@@ -115,65 +113,6 @@ std::vector<Track> linkTracks(const std::vector<std::vector<Centre>>& rows, int 
   return done;
 }
 
-// 5. Robust polynomial u(v) along a slit: a plane's slit is a smooth curve. A piece of something
-// else joined to a slit's end (a neighbour's end, a bright grain) must not pull the curve: the
-// first fit is a parabola through the middle half of the rows only, and each later fit takes the
-// centres near the one before, its limit from the median residual (robust), not the mean square.
-// Only the centres `on_pattern` (slit_pattern.h) take part.
-struct RowScale {  // a track's rows scaled to [-1, 1]
-  double mid, half;
-  explicit RowScale(const Track& t)
-      : mid(0.5 * (t.firstRow() + t.lastRow())),
-        half(std::max(1.0, 0.5 * (t.lastRow() - t.firstRow()))) {}
-  double operator()(int row) const { return (row - mid) / half; }
-};
-
-Eigen::VectorXd fitSlit(const Track& t, const std::vector<bool>& on_pattern, int degree,
-                        std::vector<bool>* inlier) {
-  const std::vector<Centre>& pts = t.points;
-  const RowScale scale(t);
-  const int n = static_cast<int>(pts.size());
-  constexpr std::size_t kFewest = 16;  // a shorter track starts from all of its centres
-  inlier->assign(pts.size(), pts.size() < kFewest);
-  for (std::size_t k = pts.size() / 4; k < pts.size() - pts.size() / 4; ++k) (*inlier)[k] = true;
-  for (std::size_t k = 0; k < pts.size(); ++k) (*inlier)[k] = (*inlier)[k] && on_pattern[k];
-  // Where the pattern has judged the middle half mostly off it, its centres elsewhere start.
-  if (static_cast<std::size_t>(std::count(inlier->begin(), inlier->end(), true)) < kFewest)
-    *inlier = on_pattern;
-  Eigen::VectorXd coef = Eigen::VectorXd::Zero(degree + 1);
-  std::vector<double> res(pts.size());
-  constexpr int kPasses = 6;
-  for (int pass = 0; pass < kPasses; ++pass) {
-    const int d_max = pass == 0 ? std::min(degree, 2) : degree;
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, degree + 1);
-    Eigen::VectorXd b(n);
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const double s = scale(pts[k].row);
-      const double w = (*inlier)[k] ? 1.0 : 0.0;
-      double p = 1;
-      for (int d = 0; d <= d_max; ++d, p *= s) a(i, d) = w * p;
-      b(i) = w * pts[k].u;
-    }
-    coef = a.colPivHouseholderQr().solve(b);
-    std::vector<double> kept;
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const double s = scale(pts[k].row);
-      double p = 1, u = 0;
-      for (int d = 0; d <= degree; ++d, p *= s) u += coef(d) * p;
-      res[k] = pts[k].u - u;
-      if ((*inlier)[k]) kept.push_back(std::abs(res[k]));
-    }
-    const double sigma = kept.empty() ? 0.0 : 1.4826 * upperMedian(kept);
-    // After the parabola, a generous limit: the full curve is not fitted yet.
-    const double limit = pass == 0 ? std::max(3.0, 6.0 * sigma) : std::max(0.3, 3.0 * sigma);
-    for (std::size_t k = 0; k < pts.size(); ++k)
-      (*inlier)[k] = on_pattern[k] && std::abs(res[k]) <= limit;
-  }
-  return coef;
-}
-
 /// A track's centres measured across the stripe (stripe_across.h), as the extractor measures a
 /// frame's, along the track's own course over kReach centres each side.
 void measureAcross(const cv::Mat& image, double width, Track* t) {
@@ -224,54 +163,23 @@ void measureRaw(const cv::Mat& image, double width, Estimator estimator,
   for (Track& t : *tracks) measureAcross(image, width, &t);
 }
 
-/// A track as a reference slit: raw centres, or the smoothed curve over the rows where the slit
-/// runs clean. Adds the squared residuals of the kept centres to `ss`, their count to `m`. False
-/// when fewer than min_rows clean rows are left.
-bool toSlit(const Track& t, const std::vector<bool>& on_pattern, const ReferenceConfig& config,
-            ReferenceSlit* slit, double* ss, std::size_t* m) {
-  slit->first_row = t.firstRow();
-  slit->u.assign(static_cast<std::size_t>(t.lastRow() - slit->first_row + 1), kNaN);
-  if (config.smoothing_degree == 0) {
-    for (const Centre& c : t.points)
-      slit->u[static_cast<std::size_t>(c.row - slit->first_row)] = static_cast<float>(c.u);
-    return true;
+/// For each centre of each slit, whether it takes part in its slit's final fit: each slit's own
+/// robust fit first, then the pattern the slits make together (a stretch that grout pulled
+/// sideways is off it). A slit with fewer than min_rows centres on the pattern keeps its own fit.
+std::vector<std::vector<bool>> judgeSlits(const std::vector<Track>& slits,
+                                          const ReferenceConfig& config) {
+  std::vector<std::vector<bool>> on(slits.size());
+  for (std::size_t k = 0; k < slits.size(); ++k) {
+    const std::vector<bool> all(slits[k].points.size(), true);
+    on[k] = all;
+    if (config.smoothing_degree > 0) fitSlit(slits[k], all, config.smoothing_degree, &on[k]);
   }
-  // Near its ends a slit is cut inside the row profile, which narrows the profile (as the raw
-  // image shows it) and pulls its centre inwards: such rows are dropped until the slit runs clean.
-  // The width changes slowly along a slit: each end is judged by the rows next to it.
-  const std::size_t n = t.points.size(), near = std::min<std::size_t>(n / 2, 40);
-  auto narrowness = [&](std::size_t from) {
-    std::vector<double> w;
-    for (std::size_t i = from; i < from + near; ++i) w.push_back(t.points[i].width);
-    return 0.85 * upperMedian(w);
-  };
-  const double narrow_first = narrowness(0), narrow_last = narrowness(n - near);
-  std::vector<bool> inlier;
-  const Eigen::VectorXd coef = fitSlit(t, on_pattern, config.smoothing_degree, &inlier);
-  auto clean = [&](std::size_t i) {
-    return inlier[i] && t.points[i].width >= (i < n / 2 ? narrow_first : narrow_last);
-  };
-  std::size_t begin = 0, end = t.points.size();
-  while (begin < end && !clean(begin)) ++begin;
-  while (end > begin && !clean(end - 1)) --end;
-  if (end - begin < static_cast<std::size_t>(config.min_rows)) return false;
-  slit->first_row = t.points[begin].row;
-  const int kept_last = t.points[end - 1].row;
-  slit->u.assign(static_cast<std::size_t>(kept_last - slit->first_row + 1), kNaN);
-  for (int r = slit->first_row; r <= kept_last; ++r) {
-    const double s = RowScale(t)(r);
-    double p = 1, u = 0;
-    for (int k = 0; k <= config.smoothing_degree; ++k, p *= s) u += coef(k) * p;
-    slit->u[static_cast<std::size_t>(r - slit->first_row)] = static_cast<float>(u);
-  }
-  for (std::size_t i = begin; i < end; ++i) {
-    if (!inlier[i]) continue;
-    const double d =
-        t.points[i].u - slit->u[static_cast<std::size_t>(t.points[i].row - slit->first_row)];
-    *ss += d * d;
-    ++*m;
-  }
-  return true;
+  if (config.smoothing_degree == 0) return on;
+  on = onPattern(slits, on);
+  for (auto& slit : on)
+    if (std::count(slit.begin(), slit.end(), true) < config.min_rows)
+      slit.assign(slit.size(), true);
+  return on;
 }
 
 }  // namespace
@@ -358,21 +266,8 @@ DetectedSlits detectSlitsInRange(const cv::Mat& image, const ReferenceConfig& co
     measureRaw<std::uint16_t>(image, width, config.estimator, &slits);
   double ss = 0;
   std::size_t m = 0;
-  // Each slit's own robust fit, then the pattern they make together: the centres off it (a
-  // stretch pulled sideways by grout or grain) take no part in the slit's final fit.
-  std::vector<std::vector<bool>> on_pattern(slits.size());
+  const std::vector<std::vector<bool>> on_pattern = judgeSlits(slits, config);
   for (std::size_t k = 0; k < slits.size(); ++k) {
-    const std::vector<bool> all(slits[k].points.size(), true);
-    on_pattern[k] = all;
-    if (config.smoothing_degree > 0)
-      fitSlit(slits[k], all, config.smoothing_degree, &on_pattern[k]);
-  }
-  on_pattern = onPattern(slits, on_pattern);
-  for (std::size_t k = 0; k < slits.size(); ++k) {
-    // A slit that hardly lies on the pattern anywhere (a short piece, much of it on grout) keeps
-    // its own fit, as every slit would without the pattern.
-    auto& on = on_pattern[k];
-    if (std::count(on.begin(), on.end(), true) < config.min_rows) on.assign(on.size(), true);
     ReferenceSlit slit;
     if (toSlit(slits[k], on_pattern[k], config, &slit, &ss, &m))
       out.slits.push_back(std::move(slit));
