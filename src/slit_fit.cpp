@@ -20,6 +20,13 @@ struct RowScale {  // a track's rows scaled to [-1, 1]
   double operator()(int row) const { return (row - mid) / half; }
 };
 
+/// The polynomial sum of coef(d) s^d for d <= `degree`.
+double polynomialAt(const Eigen::VectorXd& coef, int degree, double s) {
+  double p = 1, u = 0;
+  for (int d = 0; d <= degree; ++d, p *= s) u += coef(d) * p;
+  return u;
+}
+
 }  // namespace
 
 Eigen::VectorXd fitSlit(const Track& t, const std::vector<bool>& on_pattern, int degree,
@@ -51,12 +58,8 @@ Eigen::VectorXd fitSlit(const Track& t, const std::vector<bool>& on_pattern, int
     }
     coef = a.colPivHouseholderQr().solve(b);
     std::vector<double> kept;
-    for (int i = 0; i < n; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const double s = scale(pts[k].row);
-      double p = 1, u = 0;
-      for (int d = 0; d <= degree; ++d, p *= s) u += coef(d) * p;
-      res[k] = pts[k].u - u;
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      res[k] = pts[k].u - polynomialAt(coef, degree, scale(pts[k].row));
       if ((*inlier)[k]) kept.push_back(std::abs(res[k]));
     }
     const double sigma = kept.empty() ? 0.0 : 1.4826 * upperMedian(kept);
@@ -99,12 +102,10 @@ bool toSlit(const Track& t, const std::vector<bool>& on_pattern, const Reference
   slit->first_row = t.points[begin].row;
   const int kept_last = t.points[end - 1].row;
   slit->u.assign(static_cast<std::size_t>(kept_last - slit->first_row + 1), kNaN);
-  for (int r = slit->first_row; r <= kept_last; ++r) {
-    const double s = RowScale(t)(r);
-    double p = 1, u = 0;
-    for (int k = 0; k <= config.smoothing_degree; ++k, p *= s) u += coef(k) * p;
-    slit->u[static_cast<std::size_t>(r - slit->first_row)] = static_cast<float>(u);
-  }
+  const RowScale scale(t);
+  for (int r = slit->first_row; r <= kept_last; ++r)
+    slit->u[static_cast<std::size_t>(r - slit->first_row)] =
+        static_cast<float>(polynomialAt(coef, config.smoothing_degree, scale(r)));
   for (std::size_t i = begin; i < end; ++i) {
     if (!inlier[i]) continue;
     const double d =

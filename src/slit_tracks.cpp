@@ -169,12 +169,12 @@ void measureRaw(const cv::Mat& image, double width, Estimator estimator,
 std::vector<std::vector<bool>> judgeSlits(const std::vector<Track>& slits,
                                           const ReferenceConfig& config) {
   std::vector<std::vector<bool>> on(slits.size());
+  for (std::size_t k = 0; k < slits.size(); ++k) on[k].assign(slits[k].points.size(), true);
+  if (config.smoothing_degree == 0) return on;  // raw centres: nothing is fitted
   for (std::size_t k = 0; k < slits.size(); ++k) {
-    const std::vector<bool> all(slits[k].points.size(), true);
-    on[k] = all;
-    if (config.smoothing_degree > 0) fitSlit(slits[k], all, config.smoothing_degree, &on[k]);
+    const std::vector<bool> all = on[k];
+    fitSlit(slits[k], all, config.smoothing_degree, &on[k]);
   }
-  if (config.smoothing_degree == 0) return on;
   on = onPattern(slits, on);
   for (auto& slit : on)
     if (std::count(slit.begin(), slit.end(), true) < config.min_rows)
