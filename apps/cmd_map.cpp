@@ -22,7 +22,7 @@
 namespace multislit::apps {
 namespace {
 
-void declareOptions(cli::ArgParser& args) {
+void declareMapOptions(cli::ArgParser& args) {
   args.option("camera", "", "GigE Vision camera address (127.0.0.1 for multislit emulate)");
   args.option("sequence", "", "folder of recorded PNG frames (frames.csv gives their stamps)");
   args.option("simulate", "", "the simulator filming a scenario (ball, cable, floor, ...)");
@@ -142,7 +142,7 @@ int runMap(int argc, char** argv) {
       "      --poses odometry.csv --out run1\n"
       "A recording (multislit simulate or walk --record writes one):\n"
       "  multislit map --sequence rec --calibration rec/calibration.yaml --out out/map");
-  declareOptions(args);
+  declareMapOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);

@@ -26,7 +26,7 @@
 namespace multislit::apps {
 namespace {
 
-void declareOptions(cli::ArgParser& args) {
+void declareWalkOptions(cli::ArgParser& args) {
   args.option("out", "out/walk", "output folder");
   args.option("frames", std::to_string(kWalkFrames),
               "frames to walk (30 Hz; the paper's run is about 900)");
@@ -350,7 +350,7 @@ int runWalk(int argc, char** argv) {
       "multi-slit sensor walks; a 40 mm ping-pong ball is thrown in just in front of its foot\n"
       "(it stops for 5 s), a 7 mm LAN cable lies across its path (it turns away). Each frame:\n"
       "image -> RDMap -> floor (RANSAC) -> obstacles -> OctoMap -> footsteps -> walk/turn/stop.");
-  declareOptions(args);
+  declareWalkOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C: the walk ends at a frame boundary, every output written
   const WalkConfig config = configFromArgs(args);

@@ -1,6 +1,7 @@
 #include "plot.h"
 
 #include "common.h"
+#include "draw.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -12,18 +13,9 @@ namespace multislit::apps {
 namespace {
 
 constexpr int kWidth = 900, kHeight = 520, kLeft = 80, kRight = 30, kTop = 70, kBottom = 70;
-const cv::Scalar kInk(40, 40, 40), kGrid(225, 225, 225);
 
 cv::Scalar bgr(unsigned rgb) {
   return cv::Scalar(rgb & 0xff, (rgb >> 8) & 0xff, (rgb >> 16) & 0xff);
-}
-
-void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5,
-          bool centred = false) {
-  int base = 0;
-  const cv::Size size = cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base);
-  if (centred) at.x -= size.width / 2;
-  cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, kInk, 1, cv::LINE_AA);
 }
 
 // A "nice" axis maximum and tick step for values up to `top`.
@@ -42,12 +34,12 @@ cv::Mat frame(const std::string& title, const std::string& y_label, double y_max
     cv::line(img, {kLeft, py}, {kWidth - kRight, py}, kGrid, 1);
     char label[32];
     std::snprintf(label, sizeof label, step < 0.1 ? "%.2f" : step < 1 ? "%.1f" : "%.0f", y);
-    text(img, label, {8, py + 5});
+    drawText(img, label, {8, py + 5});
   }
   cv::line(img, {kLeft, kTop}, {kLeft, kTop + h}, kInk, 1);
   cv::line(img, {kLeft, kTop + h}, {kWidth - kRight, kTop + h}, kInk, 1);
-  text(img, title, {kWidth / 2, 28}, 0.6, true);
-  text(img, y_label, {8, kTop - 18}, 0.45);
+  drawCentredText(img, title, {kWidth / 2, 28}, 0.6);
+  drawText(img, y_label, {8, kTop - 18}, 0.45);
   return img;
 }
 
@@ -79,8 +71,8 @@ void drawBarChart(const std::string& path, const std::string& title, const std::
     }
     char value[32];
     std::snprintf(value, sizeof value, "%.3f", v);
-    text(img, value, {(x0 + x1) / 2, py(v) - 8}, 0.45, true);
-    text(img, labels[static_cast<std::size_t>(i)], {(x0 + x1) / 2, kTop + h + 25}, 0.5, true);
+    drawCentredText(img, value, {(x0 + x1) / 2, py(v) - 8}, 0.45);
+    drawCentredText(img, labels[static_cast<std::size_t>(i)], {(x0 + x1) / 2, kTop + h + 25}, 0.5);
   }
   writeImage(path, img);
 }
@@ -106,9 +98,9 @@ void drawLinePlot(const std::string& path, const std::string& title, const std::
   for (double x = 0; x <= static_cast<double>(n) - 1 + 1e-9 && x <= x_max; x += x_step) {
     char label[32];
     std::snprintf(label, sizeof label, "%.0f", x);
-    text(img, label, {px(static_cast<std::size_t>(x)), kTop + h + 20}, 0.45, true);
+    drawCentredText(img, label, {px(static_cast<std::size_t>(x)), kTop + h + 20}, 0.45);
   }
-  text(img, x_label, {kLeft + w / 2, kTop + h + 50}, 0.5, true);
+  drawCentredText(img, x_label, {kLeft + w / 2, kTop + h + 50}, 0.5);
   int legend_y = kTop + 15;
   for (const Series& s : series) {
     for (std::size_t i = 1; i < s.values.size(); ++i)
@@ -116,7 +108,7 @@ void drawLinePlot(const std::string& path, const std::string& title, const std::
                cv::LINE_AA);
     if (!s.label.empty()) {
       cv::line(img, {kWidth - 230, legend_y - 5}, {kWidth - 200, legend_y - 5}, bgr(s.colour), 3);
-      text(img, s.label, {kWidth - 192, legend_y});
+      drawText(img, s.label, {kWidth - 192, legend_y});
       legend_y += 20;
     }
   }

@@ -1,6 +1,7 @@
 #include "walk_figures.h"
 
 #include "common.h"
+#include "draw.h"
 
 #include "multislit/plane_model.h"
 
@@ -13,21 +14,16 @@
 namespace multislit::apps {
 namespace {
 
-const cv::Scalar kInk(40, 40, 40), kGrid(230, 230, 230), kWhite(255, 255, 255);
+const cv::Scalar kWhite(255, 255, 255);
 const cv::Scalar kFloorGreen(60, 170, 60), kPlaneGreen(190, 240, 190), kObstacleRed(30, 30, 220);
 const cv::Scalar kObject(150, 40, 120), kLeftFoot(210, 140, 40), kRightFoot(40, 150, 240);
-
-void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5,
-          const cv::Scalar& colour = kInk) {
-  cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
-}
 
 /// Legend entries in a row under the title.
 void legend(cv::Mat& img, int* x, const cv::Scalar& colour, const std::string& label) {
   const int y = 58;
   cv::rectangle(img, {*x, y - 10}, {*x + 14, y + 2}, colour, cv::FILLED);
   cv::rectangle(img, {*x, y - 10}, {*x + 14, y + 2}, kInk, 1);
-  text(img, label, {*x + 20, y}, 0.45);
+  drawText(img, label, {*x + 20, y}, 0.45);
   int base = 0;
   *x += 40 + cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &base).width;
 }
@@ -90,12 +86,12 @@ void drawRDMapFigure(const std::string& path, const std::string& title,
   cv::arrowedLine(img, o, view(view.u0 + 250 / view.su, view.v0, 0), kInk, 1, cv::LINE_AA);
   cv::arrowedLine(img, o, view(view.u0, view.v0 + 250 / view.sv, 0), kInk, 1, cv::LINE_AA);
   cv::arrowedLine(img, o, {o.x, o.y - 80}, kInk, 1, cv::LINE_AA);
-  text(img, "u [px]", view(view.u0 + 260 / view.su, view.v0, 0) + cv::Point(5, 5));
-  text(img, "v [px]", view(view.u0, view.v0 + 260 / view.sv, 0) + cv::Point(-20, -8));
+  drawText(img, "u [px]", view(view.u0 + 260 / view.su, view.v0, 0) + cv::Point(5, 5));
+  drawText(img, "v [px]", view(view.u0, view.v0 + 260 / view.sv, 0) + cv::Point(-20, -8));
   char label[160];
   std::snprintf(label, sizeof label, "dk [px] x%.0f", view.gain);
-  text(img, label, {o.x - 40, o.y - 90});
-  text(img, title, {30, 32}, 0.65);
+  drawText(img, label, {o.x - 40, o.y - 90});
+  drawText(img, title, {30, 32}, 0.65);
   int x = 30;
   std::snprintf(label, sizeof label, "floor points (%zu)", floor.inliers.size());
   legend(img, &x, kFloorGreen, label);
@@ -209,8 +205,8 @@ void drawTopView(const std::string& path, const OccupancyMap& map, const TopView
   for (std::size_t k = 0; k < c.objects.size(); ++k) {
     drawObject(img, view, c.objects[k]);
     if (k < c.object_notes.size())
-      text(img, c.object_notes[k], view(c.objects[k].centre.head<2>()) + cv::Point(12, -12), 0.45,
-           kObject);
+      drawText(img, c.object_notes[k], view(c.objects[k].centre.head<2>()) + cv::Point(12, -12),
+               0.45, kObject);
   }
   std::vector<cv::Point> line;
   for (const Pose2D& p : c.path) line.push_back(view(p.position()));
@@ -223,8 +219,8 @@ void drawTopView(const std::string& path, const OccupancyMap& map, const TopView
     cv::polylines(img, sole, true, c.footsteps[k].foot == Foot::Left ? kLeftFoot : kRightFoot, 1,
                   cv::LINE_AA);
   }
-  text(img, "occupancy map from above, path and footsteps (10 cm grid; walking to the right)",
-       {20, 30}, 0.6);
+  drawText(img, "occupancy map from above, path and footsteps (10 cm grid; walking to the right)",
+           {20, 30}, 0.6);
   int x = 20;
   legend(img, &x, cv::Scalar(0, 220, 255), "occupied voxel (yellow: floor, red: 5 cm up)");
   legend(img, &x, cv::Scalar(236, 236, 236), "floor seen free");

@@ -8,6 +8,12 @@ namespace multislit::detail {
 
 /// check(ok, field, rule) throws std::invalid_argument("<Config>.<field> <rule>") unless ok, so
 /// that every validate() names the field the user got wrong the same way.
+/// require(ok, what, rule) throws std::invalid_argument("<what> <rule>") unless ok: checks whose
+/// message names its subject itself (an element of a list, a whole struct).
+inline void require(bool ok, const std::string& what, const std::string& rule) {
+  if (!ok) throw std::invalid_argument(what + " " + rule);
+}
+
 class FieldCheck {
  public:
   explicit constexpr FieldCheck(const char* config) : config_(config) {}

@@ -6,11 +6,8 @@
 
 namespace multislit {
 
-namespace {
-constexpr detail::FieldCheck require("FootConfig");
-}  // namespace
-
 void FootConfig::validate() const {
+  constexpr detail::FieldCheck require("FootConfig");
   require(foot_length > 0 && foot_length < 1, "foot_length", "must be in (0, 1) m");
   require(foot_width > 0 && foot_width < 1, "foot_width", "must be in (0, 1) m");
   require(foot_separation >= foot_width, "foot_separation", "must be >= foot_width (feet apart)");

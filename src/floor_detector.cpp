@@ -21,8 +21,6 @@ namespace multislit {
 
 namespace {
 
-constexpr detail::FieldCheck require("FloorDetectorConfig");
-
 /// Sec. III-B: q planes through three points of three different slits; the plane with the most
 /// points within `threshold` wins. With `local_refit`, each new best plane is replaced by the
 /// least-squares plane (eq. 2) of its inliers when that holds more points (LO-RANSAC): a plane
@@ -299,6 +297,7 @@ int FloorDetectorConfig::iterations() const {
 }
 
 void FloorDetectorConfig::validate() const {
+  constexpr detail::FieldCheck require("FloorDetectorConfig");
   require(sigma > 0.0 && std::isfinite(sigma), "sigma", "must be > 0 [px]");
   require(threshold_sigmas > 0.0 && std::isfinite(threshold_sigmas), "threshold_sigmas",
           "must be > 0");

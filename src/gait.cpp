@@ -9,13 +9,8 @@
 
 namespace multislit {
 
-namespace {
-
-constexpr detail::FieldCheck require("GaitConfig");
-
-}  // namespace
-
 void GaitConfig::validate() const {
+  constexpr detail::FieldCheck require("GaitConfig");
   require(frame_rate > 0, "frame_rate", "must be > 0 Hz");
   require(step_frames >= 2, "step_frames", "must be >= 2");
   require(roll_amplitude >= 0 && roll_amplitude < 20, "roll_amplitude", "must be in [0, 20) deg");

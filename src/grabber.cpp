@@ -21,8 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr detail::FieldCheck require("GrabberConfig");
-
 // The extractor's settings, with the grabber's frame_id; validates the whole config.
 ExtractorConfig extractorConfig(const GrabberConfig& config) {
   config.validate();
@@ -46,6 +44,7 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr toXYZ(const pcl::PointCloud<PointRDM>& rdmap
 }  // namespace
 
 void GrabberConfig::validate() const {
+  constexpr detail::FieldCheck require("GrabberConfig");
   require(!frame_id.empty(), "frame_id", "must not be empty");
   require(poll_ms >= 1 && poll_ms <= 1000, "poll_ms", "must be in [1, 1000]");
   require(stop_timeout_ms >= poll_ms, "stop_timeout_ms", "must be >= poll_ms");

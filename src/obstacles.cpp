@@ -23,8 +23,6 @@ namespace multislit {
 
 namespace {
 
-constexpr detail::FieldCheck require("ObstacleClustererConfig");
-
 /// Disjoint sets over 0 .. n-1 (union by size, path halving).
 class DisjointSets {
  public:
@@ -102,6 +100,7 @@ XYZSums sumXYZ(const PointRDM* points, const pcl::index_t* indices, std::size_t 
 }  // namespace
 
 void ObstacleClustererConfig::validate() const {
+  constexpr detail::FieldCheck require("ObstacleClustererConfig");
   require(max_gap >= 0, "max_gap", "must be >= 0 points");
   require(slit_link_radius > 0, "slit_link_radius", "must be > 0 px");
   require(tolerance > 0 && tolerance < 1, "tolerance", "must be in (0, 1) m");

@@ -18,8 +18,6 @@ namespace multislit {
 
 namespace {
 
-constexpr detail::FieldCheck require("OccupancyMapConfig");
-
 bool isProbability(double p) { return p > 0 && p < 1; }
 
 octomap::point3d toOcto(const Eigen::Vector3d& p) {
@@ -52,6 +50,7 @@ struct MapFrame {
 }  // namespace
 
 void OccupancyMapConfig::validate() const {
+  constexpr detail::FieldCheck require("OccupancyMapConfig");
   require(resolution >= 0.001 && resolution <= 0.5, "resolution", "must be in [0.001, 0.5] m");
   require(isProbability(prob_hit) && prob_hit > 0.5, "prob_hit", "must be in (0.5, 1)");
   require(isProbability(prob_weak_hit) && prob_weak_hit > 0.5, "prob_weak_hit",

@@ -19,8 +19,6 @@ namespace multislit {
 
 namespace {
 
-constexpr detail::FieldCheck require("PlaneDetectorConfig");
-
 /// The points taking part, copied once into a contiguous array, and their cloud indices.
 struct Points {
   std::vector<Eigen::Vector3f> xyz;
@@ -207,6 +205,7 @@ PlaneResult detectPlane(const PlaneDetectorConfig& config, const pcl::PointCloud
 }  // namespace
 
 void PlaneDetectorConfig::validate() const {
+  constexpr detail::FieldCheck require("PlaneDetectorConfig");
   require(threshold > 0.0 && std::isfinite(threshold), "threshold", "must be > 0 [m]");
   require(max_iterations >= 1, "max_iterations", "must be >= 1");
   require(probability > 0.0 && probability < 1.0, "probability", "must be in (0, 1)");

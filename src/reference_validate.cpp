@@ -5,6 +5,8 @@
 
 #include "multislit/image_file.h"
 
+#include "config_check.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -13,11 +15,9 @@
 
 namespace multislit {
 
-namespace {
+using detail::require;
 
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument(field + " " + rule);
-}
+namespace {
 
 /// Rows of slit `s` as [first, last], in 64 bits (a corrupt first_row must not overflow).
 long long lastRowOf(const ReferenceSlit& s) {

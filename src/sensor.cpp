@@ -3,6 +3,7 @@
 #include "multislit/units.h"
 
 #include "avx2_clones.h"
+#include "config_check.h"
 #include "yaml_io.h"
 
 #include <algorithm>
@@ -10,15 +11,11 @@
 #include <stdexcept>
 
 namespace multislit {
-namespace {
-
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument("sensor config: " + field + " " + rule);
-}
-
-}  // namespace
 
 void SensorConfig::validate() const {
+  const auto require = [](bool ok, const std::string& field, const std::string& rule) {
+    detail::require(ok, "sensor config: " + field, rule);
+  };
   const CameraConfig& c = camera;
   const std::string sides = "must be in [16, " + std::to_string(kMaxImageSide) + "] px";
   require(c.width >= 16 && c.width <= kMaxImageSide, "camera.width", sides);

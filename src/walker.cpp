@@ -10,12 +10,6 @@
 
 namespace multislit {
 
-namespace {
-
-constexpr detail::FieldCheck require("WalkerConfig");
-
-}  // namespace
-
 const char* commandName(Command command) {
   switch (command) {
     case Command::Walk:
@@ -43,6 +37,7 @@ const char* reasonName(Reason reason) {
 }
 
 void WalkerConfig::validate() const {
+  constexpr detail::FieldCheck require("WalkerConfig");
   require(lookahead_steps >= 1, "lookahead_steps", "must be >= 1");
   require(turn_lookahead_steps >= 1, "turn_lookahead_steps", "must be >= 1");
   require(margin >= 0, "margin", "must be >= 0 m");

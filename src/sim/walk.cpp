@@ -1,5 +1,7 @@
 #include "multislit/sim/walk.h"
 
+#include "config_check.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,15 +11,13 @@
 
 namespace multislit {
 
+using detail::require;
+
 namespace {
 
 // Objects lower than this give less than the 3 sigma threshold (0.9 px) in one frame.
 constexpr double kVisibleHeight = 0.0035;  // [m]
 constexpr double kBallRadius = 0.020;      // ping-pong ball [m]
-
-void require(bool ok, const std::string& field, const std::string& rule) {
-  if (!ok) throw std::invalid_argument(field + " " + rule);
-}
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
