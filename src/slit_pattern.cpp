@@ -12,7 +12,7 @@ namespace {
 
 constexpr int kSlitDegree = 5;     // of the surface across the slits [-]
 constexpr int kRowDegree = 5;      // of the surface along them [-]
-constexpr int kPasses = 4;         // fits, each on the centres the one before kept [-]
+constexpr int kPatternPasses = 4;  // fits, each on the centres the one before kept [-]
 constexpr double kMinLimit = 0.3;  // a centre this near the surface is on it [px]
 constexpr double kMinShare = 0.6;  // of the centres that must fit for the surface to judge [-]
 
@@ -63,7 +63,7 @@ std::vector<std::vector<bool>> onPattern(const std::vector<Track>& slits,
   std::vector<bool> kept;
   for (const std::vector<bool>& slit : start) kept.insert(kept.end(), slit.begin(), slit.end());
   Eigen::VectorXd residual;
-  for (int pass = 0; pass < kPasses; ++pass) {
+  for (int pass = 0; pass < kPatternPasses; ++pass) {
     Eigen::MatrixXd a = b;
     Eigen::VectorXd y = u;
     for (Eigen::Index r = 0; r < a.rows(); ++r)
