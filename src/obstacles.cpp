@@ -106,6 +106,7 @@ void ObstacleClustererConfig::validate() const {
   require(tolerance > 0 && tolerance < 1, "tolerance", "must be in (0, 1) m");
   require(min_points >= 1, "min_points", "must be >= 1");
   require(min_run >= 1, "min_run", "must be >= 1");
+  require(max_hops >= 0, "max_hops", "must be >= 0");
 }
 
 std::size_t ObstacleResult::pointCount() const {
@@ -154,26 +155,63 @@ ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config, cons
 
 namespace {
 
-/// The most points of one slit (one cloud row of `width`) on neighbouring rows, a gap of one
-/// row allowed, in a group; with `plane` (A, B, C) given, only points on one side of it (the sign
-/// of dk - (A u + B v + C)) make a run.
-int longestRun(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices group,
-               const Eigen::Vector3d* plane) {
+/// For each of the points `sorted` (cloud indices in ascending order), the length of its run: the
+/// points of one slit (one cloud row) on neighbouring rows, a gap of one row allowed; with `plane`
+/// (A, B, C) given, only points on one side of it (the sign of dk - (A u + B v + C)) make a run.
+std::vector<int> runLengths(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& sorted,
+                            const Eigen::Vector3d* plane) {
   const auto width = static_cast<pcl::index_t>(cloud.width);
-  std::sort(group.begin(), group.end());
   const auto above = [&](pcl::index_t i) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
     return p.dk > (*plane)[0] * p.u + (*plane)[1] * p.v + (*plane)[2];
   };
-  int best = 0, run = 0;
-  for (std::size_t i = 0; i < group.size(); ++i) {
-    const bool continues = i > 0 && group[i] / width == group[i - 1] / width &&
-                           group[i] - group[i - 1] <= 2 &&
-                           (!plane || above(group[i]) == above(group[i - 1]));
-    run = continues ? run + 1 : 1;
-    best = std::max(best, run);
+  std::vector<int> length(sorted.size());
+  std::size_t start = 0;
+  for (std::size_t i = 1; i <= sorted.size(); ++i) {
+    const bool continues = i < sorted.size() && sorted[i] / width == sorted[i - 1] / width &&
+                           sorted[i] - sorted[i - 1] <= 2 &&
+                           (!plane || above(sorted[i]) == above(sorted[i - 1]));
+    if (continues) continue;
+    std::fill(length.begin() + static_cast<std::ptrdiff_t>(start),
+              length.begin() + static_cast<std::ptrdiff_t>(i), static_cast<int>(i - start));
+    start = i;
   }
-  return best;
+  return length;
+}
+
+/// The longest run (runLengths) among the points of `group`.
+int longestRun(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices group,
+               const Eigen::Vector3d* plane) {
+  std::sort(group.begin(), group.end());
+  const std::vector<int> length = runLengths(cloud, group, plane);
+  return length.empty() ? 0 : *std::max_element(length.begin(), length.end());
+}
+
+/// Each point of `links` (pairs of neighbours) that lies in no run (in_run false) joins the group
+/// of the nearest point in a run at most `max_hops` links away, reached first, and that group
+/// only: points in no run neither chain groups together nor reach further. Those no run reaches
+/// are grouped with their neighbours as before.
+void growFromRuns(const std::vector<char>& in_run,
+                  const std::vector<std::pair<std::size_t, std::size_t>>& links, int max_hops,
+                  DisjointSets& sets) {
+  const std::size_t n = in_run.size();
+  std::vector<std::vector<std::size_t>> next_to(n);
+  for (const auto& [a, b] : links) next_to[a].push_back(b), next_to[b].push_back(a);
+  std::vector<std::size_t> seed(n, n), frontier;
+  for (std::size_t j = 0; j < n; ++j)
+    if (in_run[j]) seed[j] = j, frontier.push_back(j);
+  for (int hop = 1; hop <= max_hops && !frontier.empty(); ++hop) {
+    std::vector<std::size_t> reached;
+    for (const std::size_t a : frontier)
+      for (const std::size_t b : next_to[a])
+        if (seed[b] == n) seed[b] = seed[a], reached.push_back(b);
+    frontier.swap(reached);
+  }
+  for (std::size_t j = 0; j < n; ++j)
+    if (!in_run[j] && seed[j] < n) sets.join(j, seed[j]);
+  // What no run reaches stays together as before, a group of noise that the run rule rejects.
+  for (const auto& [a, b] : links)
+    if (seed[a] == n && seed[b] == n) sets.join(a, b);
 }
 
 }  // namespace
@@ -186,14 +224,14 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
   // The floor in metric space, from which heights are measured.
   result.floor = fitMetricFloor(*cloud, floor.inliers);
   // Group the points off the floor.
+  const Eigen::Vector3d* plane = config_.run_one_side ? &floor.plane : nullptr;
   const std::vector<pcl::Indices> groups = config_.method == ClusterMethod::Grid
-                                               ? gridGroups(*cloud, floor.obstacles)
+                                               ? gridGroups(*cloud, floor.obstacles, plane)
                                                : euclideanGroups(*cloud, floor.obstacles);
   // Reject groups too small to be real, then size and place the others.
   for (const pcl::Indices& group : groups) {
     if (group.size() < static_cast<std::size_t>(config_.min_points) ||
-        longestRun(*cloud, group, config_.run_one_side ? &floor.plane : nullptr) <
-            config_.min_run) {
+        longestRun(*cloud, group, plane) < config_.min_run) {
       ++result.rejected_groups;
       result.rejected.insert(result.rejected.end(), group.begin(), group.end());
       continue;
@@ -209,7 +247,8 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
 }
 
 std::vector<pcl::Indices> ObstacleClusterer::gridGroups(const pcl::PointCloud<PointRDM>& cloud,
-                                                        const pcl::Indices& points) const {
+                                                        const pcl::Indices& points,
+                                                        const Eigen::Vector3d* plane) const {
   // Cloud row = slit, column = position along the slit (one image row each).
   const std::size_t width = cloud.width;
   std::vector<std::vector<std::size_t>> by_slit(cloud.height);
@@ -217,14 +256,24 @@ std::vector<pcl::Indices> ObstacleClusterer::gridGroups(const pcl::PointCloud<Po
   std::sort(sorted.begin(), sorted.end());
   for (std::size_t j = 0; j < sorted.size(); ++j)
     by_slit[static_cast<std::size_t>(sorted[j]) / width].push_back(j);
+  const std::vector<int> run = runLengths(cloud, sorted, plane);
+  std::vector<char> in_run(sorted.size());
+  for (std::size_t j = 0; j < sorted.size(); ++j) in_run[j] = run[j] >= config_.min_run;
+  // Points in runs are joined directly; the links of the others are kept for growFromRuns.
   DisjointSets sets(sorted.size());
+  std::vector<std::pair<std::size_t, std::size_t>> links;
+  const auto link = [&](std::size_t a, std::size_t b) {
+    if (in_run[a] && in_run[b])
+      sets.join(a, b);
+    else
+      links.emplace_back(a, b);
+  };
   const double r2 = config_.slit_link_radius * config_.slit_link_radius;
   for (std::size_t s = 0; s < by_slit.size(); ++s) {
     const std::vector<std::size_t>& here = by_slit[s];
     // Along the slit: at most max_gap cells between neighbours.
     for (std::size_t a = 1; a < here.size(); ++a)
-      if (sorted[here[a]] - sorted[here[a - 1]] <= config_.max_gap + 1)
-        sets.join(here[a - 1], here[a]);
+      if (sorted[here[a]] - sorted[here[a - 1]] <= config_.max_gap + 1) link(here[a - 1], here[a]);
     if (s + 1 >= by_slit.size()) continue;
     // Across to the next slit: reference positions close in the image.
     for (const std::size_t a : here) {
@@ -232,10 +281,11 @@ std::vector<pcl::Indices> ObstacleClusterer::gridGroups(const pcl::PointCloud<Po
       for (const std::size_t b : by_slit[s + 1]) {
         const PointRDM& q = cloud[static_cast<std::size_t>(sorted[b])];
         const double du = p.u - q.u, dv = p.v - q.v;
-        if (du * du + dv * dv <= r2) sets.join(a, b);
+        if (du * du + dv * dv <= r2) link(a, b);
       }
     }
   }
+  growFromRuns(in_run, links, config_.max_hops, sets);
   std::vector<pcl::Indices> groups;
   std::vector<std::size_t> group_of(sorted.size(), std::numeric_limits<std::size_t>::max());
   for (std::size_t j = 0; j < sorted.size(); ++j) {

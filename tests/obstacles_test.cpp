@@ -192,6 +192,41 @@ TEST(ObstacleClusterer, ARunLiesOnOneSideOfTheFloor) {
   EXPECT_EQ(r.obstacles[0].pointCount(), 3u);
 }
 
+// Points in no run reach at most max_hops links from a run and join one group only.
+TEST(ObstacleClusterer, ScatteredPointsNeitherChainGroupsNorSpreadThem) {
+  Seen s = look(Scene{}, ClusterMethod::Grid);
+  ASSERT_TRUE(s.floor.found);
+  ASSERT_TRUE(s.obstacles.obstacles.empty());
+  const int w = static_cast<int>(s.cloud->width), at = w / 3;
+  const auto lift = [&](int column) {
+    PointRDM& p = s.cloud->at(column, 7);
+    ASSERT_TRUE(std::isfinite(p.dk)) << column;
+    p.dk += 3.0f;
+  };
+  // A run of 3 rows, then single points 8 rows apart (within max_gap, in no run).
+  for (int k = 0; k < 3; ++k) lift(at + k);
+  for (int k = 1; k <= 4; ++k) lift(at + 2 + 8 * k);
+  s.floor = FloorDetector().detect(s.cloud);
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(MountConfig{});
+  ObstacleResult r = ObstacleClusterer().cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 5u);  // the run and the 2 singles within 2 hops
+  EXPECT_EQ(r.rejected.size(), 2u);            // the 2 beyond, a group of noise
+  ObstacleClustererConfig unlimited;
+  unlimited.max_hops = 1000;
+  r = ObstacleClusterer(unlimited).cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 7u);
+  // A second run 8 rows after the last single: the singles no longer chain the two runs into one
+  // obstacle (as any number of hops did before max_hops); each joins the run nearer to it.
+  for (int k = 0; k < 3; ++k) lift(at + 2 + 8 * 5 + k);
+  s.floor = FloorDetector().detect(s.cloud);
+  r = ObstacleClusterer(unlimited).cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 2u);
+  EXPECT_EQ(r.obstacles[0].pointCount(), 5u);
+  EXPECT_EQ(r.obstacles[1].pointCount(), 5u);
+}
+
 TEST(ObstacleClusterer, MetricFloorIsTheFloorUnderTheSensor) {
   const Seen s = look(Scene{}, ClusterMethod::Grid);
   ASSERT_TRUE(s.obstacles.floor.valid);

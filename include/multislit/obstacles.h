@@ -50,6 +50,15 @@ struct ObstacleClustererConfig {
   /// every point of its run, while noise that passes the threshold above and below the floor on
   /// neighbouring rows is no surface.
   bool run_one_side = true;
+  /// Grid: an obstacle point in no such run joins the group of a run at most this many links
+  /// (max_gap along a slit, slit_link_radius across) away, the first group to reach it and that
+  /// one only. Scattered points that pass the threshold (speckle, a stripe lost on dark grout)
+  /// then neither chain two groups together nor spread one over the floor. Over the 80 frames of
+  /// robustness_test, 0 hops (the points in runs only) gives 1.11 % false points and a recall of
+  /// >= 5 mm crossings of 0.857, 1 hop 1.33 % and 0.884, 2 hops 1.42 % and 0.891, 3 hops 1.46 % and
+  /// 0.892, 5 hops 1.48 % and 0.892; chaining through any number of points in no run gave 1.49 %
+  /// and 0.892. With min_run 1 every point is in a run.
+  int max_hops = 2;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -111,7 +120,8 @@ class ObstacleClusterer {
 
  private:
   std::vector<pcl::Indices> gridGroups(const pcl::PointCloud<PointRDM>& cloud,
-                                       const pcl::Indices& points) const;
+                                       const pcl::Indices& points,
+                                       const Eigen::Vector3d* plane) const;
   std::vector<pcl::Indices> euclideanGroups(const pcl::PointCloud<PointRDM>& cloud,
                                             const pcl::Indices& points) const;
   Obstacle describe(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
