@@ -357,10 +357,13 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   // one pattern, over 6 pairs (12 single draws): 1.49 +- 0.035 % of valid (1.44 - 1.54 %), quiet
   // 1.25 +- 0.013 %; the first 8, single draws: 1.39 +- 0.11 %, quiet 0.06 +- 0.04 % (recall
   // 0.890 - 0.902 over all 40, 0.831 +- 0.024 of the first 8: as before). Bounds at mean + 3 sd.
+  // Since points in no run join one group at most 2 links from a run (max_hops), 6 pairs: false
+  // points 1.43 +- 0.038 % (1.375 - 1.483 %), quiet 1.19 +- 0.016 %, recall 0.892 +- 0.004,
+  // quiet 0.918 +- 0.010; the sanitizers' bounds were kept.
   EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 86 : 88));
   EXPECT_GE(all.found * 100, all.high * (kSanitized ? 72 : 86));
-  EXPECT_LE(all.false_points * 1000, all.valid * (kSanitized ? 20 : 16));
-  EXPECT_LE(quiet.false_points * 1000, quiet.valid * (kSanitized ? 3 : 13));
+  EXPECT_LE(all.false_points * 10000, all.valid * (kSanitized ? 200 : 155));
+  EXPECT_LE(quiet.false_points * 10000, quiet.valid * (kSanitized ? 30 : 125));
 }
 
 // The laser off, over random photometries (textured, glossy, speckled, bright floors, 8 and 16
