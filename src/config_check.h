@@ -8,12 +8,6 @@ namespace multislit::detail {
 
 /// check(ok, field, rule) throws std::invalid_argument("<Config>.<field> <rule>") unless ok, so
 /// that every validate() names the field the user got wrong the same way.
-/// require(ok, what, rule) throws std::invalid_argument("<what> <rule>") unless ok: checks whose
-/// message names its subject itself (an element of a list, a whole struct).
-inline void require(bool ok, const std::string& what, const std::string& rule) {
-  if (!ok) throw std::invalid_argument(what + " " + rule);
-}
-
 class FieldCheck {
  public:
   explicit constexpr FieldCheck(const char* config) : config_(config) {}
@@ -24,5 +18,11 @@ class FieldCheck {
  private:
   const char* config_;
 };
+
+/// require(ok, what, rule) throws std::invalid_argument("<what> <rule>") unless ok: checks whose
+/// message names its subject itself (an element of a list, a whole struct).
+inline void require(bool ok, const std::string& what, const std::string& rule) {
+  if (!ok) throw std::invalid_argument(what + " " + rule);
+}
 
 }  // namespace multislit::detail

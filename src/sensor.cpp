@@ -14,7 +14,7 @@ namespace multislit {
 
 void SensorConfig::validate() const {
   const auto require = [](bool ok, const std::string& field, const std::string& rule) {
-    detail::require(ok, "sensor config: " + field, rule);
+    if (!ok) detail::require(false, "sensor config: " + field, rule);  // the text only on failure
   };
   const CameraConfig& c = camera;
   const std::string sides = "must be in [16, " + std::to_string(kMaxImageSide) + "] px";

@@ -11,8 +11,6 @@
 
 namespace multislit {
 
-using detail::require;
-
 namespace {
 
 // Objects lower than this give less than the 3 sigma threshold (0.9 px) in one frame.
@@ -26,13 +24,12 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 void WalkSceneConfig::validate() const {
-  require(ball_frame >= 0, "WalkSceneConfig.ball_frame", "must be >= 0");
-  require(ball_roll_frame >= ball_frame, "WalkSceneConfig.ball_roll_frame",
-          "must be >= ball_frame");
-  require(ball_roll_speed >= 0, "WalkSceneConfig.ball_roll_speed", "must be >= 0 m/s");
-  require(cable_diameter > 0 && cable_diameter < 0.1, "WalkSceneConfig.cable_diameter",
-          "must be in (0, 0.1) m");
-  require((cable_end - cable_start).norm() > cable_diameter, "WalkSceneConfig.cable_end",
+  constexpr detail::FieldCheck require("WalkSceneConfig");
+  require(ball_frame >= 0, "ball_frame", "must be >= 0");
+  require(ball_roll_frame >= ball_frame, "ball_roll_frame", "must be >= ball_frame");
+  require(ball_roll_speed >= 0, "ball_roll_speed", "must be >= 0 m/s");
+  require(cable_diameter > 0 && cable_diameter < 0.1, "cable_diameter", "must be in (0, 0.1) m");
+  require((cable_end - cable_start).norm() > cable_diameter, "cable_end",
           "must be apart from cable_start");
   for (const SceneObject& o : extra) o.validate();
 }
@@ -40,7 +37,7 @@ void WalkSceneConfig::validate() const {
 WalkWorld::WalkWorld(const WalkSceneConfig& config, double frame_rate)
     : config_(config), frame_rate_(frame_rate) {
   config_.validate();
-  require(frame_rate > 0, "WalkWorld frame_rate", "must be > 0 Hz");
+  detail::require(frame_rate > 0, "WalkWorld frame_rate", "must be > 0 Hz");
 }
 
 const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
@@ -76,7 +73,8 @@ void WalkConfig::validate() const {
   synth.validate();
   gait.validate();
   scene.validate();
-  require(truth_radius > 0, "WalkConfig.truth_radius", "must be > 0 m");
+  constexpr detail::FieldCheck require("WalkConfig");
+  require(truth_radius > 0, "truth_radius", "must be > 0 m");
 }
 
 struct WalkSimulation::Measurement {
