@@ -75,6 +75,7 @@ struct Tally {
   std::size_t miss_unmeasured = 0, miss_within = 0, miss_ungrouped = 0;
   double sigma = 0;
   std::string reference_error;  // why the reference could not be built
+  std::string photometry;       // what the photometry is, in short (describe())
   std::size_t frames = 1;
 
   void add(const Tally& t) {
@@ -232,6 +233,16 @@ inline void judgeCrossings(const Reference& ref, const RenderedFrame& f,
   }
 }
 
+// The photometry in short: floor, bit depth, speckle, stripe width, laser and ambient light.
+inline std::string describe(const Photometry& p) {
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "%s, %d bit, speckle %.2f, stripe x%.2f, laser %.2f, ambient %.2f",
+                floorTextureName(p.floor.texture), p.render.bit_depth, p.render.speckle_contrast,
+                p.render.stripe_width, p.render.laser_peak, p.render.ambient);
+  return text;
+}
+
 // One photometry: its reference, one frame of a scene at a Table I pose, both methods judged.
 // `realization` draws other noise (of the reference and the frame) on the same images. Without
 // `textured`, the floor is one albedo (no grain, tiles or grout) and all else is the photometry's.
@@ -249,6 +260,7 @@ inline Tally runVariant(int index, Kind kind, int realization, bool textured = t
   const MountConfig reference_mount = tableIPose(0), mount = tableIPose(index % 7);
   const cv::Mat reference_image = sim.renderReference(bare, reference_mount).image;
   Tally tally;
+  tally.photometry = describe(photometry);
   Reference ref;
   try {
     ref = Reference::fromImage(reference_image);

@@ -50,11 +50,11 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     std::printf(
         "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu (missed: %zu %zu %zu; above the "
         "threshold %zu/%zu) | false %zu (%zu near the object) of %zu (%zu on the truth), %zu "
-        "groups | paper: valid %zu (%zu on the truth) found %zu false %zu%s\n",
+        "groups | paper: valid %zu (%zu on the truth) found %zu false %zu%s | %s\n",
         i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
         t.miss_within, t.miss_ungrouped, t.found_above, t.above, t.false_points, t.false_near,
         t.valid, t.on_truth, t.false_groups, t.paper_valid, t.paper_on_truth, t.paper_found,
-        t.paper_false, t.paper_floor ? "" : " (no floor found)");
+        t.paper_false, t.paper_floor ? "" : " (no floor found)", t.photometry.c_str());
     // Over 20 draws of the 40: at least 0.991 of the crossings that clear the paper's contrast
     // limit measured on every variant, and at least 0.983 of the paper's valid points (variant
     // 31; 238 of the 800 below the paper's count, the others at or above it).
