@@ -1,5 +1,6 @@
 // Obstacle clusters: points off the floor grouped, sized and placed, against the simulator's truth.
 #include "multislit/obstacles.h"
+#include "default_reference.h"
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
 #include "multislit/sim/rdmap_synth.h"
@@ -20,10 +21,7 @@ using namespace multislit;
 
 namespace {
 
-const Reference& reference() {
-  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
-  return ref;
-}
+const Reference& reference() { return test::defaultReference(); }
 
 const RDMapSynthesizer& synth() {
   static const RDMapSynthesizer s(SensorConfig{}, reference());

@@ -1,6 +1,7 @@
 // The occupancy map: evidence over frames (a screw too small for one frame), free space clearing a
 // ball that rolled away, no cells from noise, .bt files, bounded memory, footprint queries.
 #include "multislit/occupancy_map.h"
+#include "default_reference.h"
 #include "multislit/sim/walk.h"
 #include "test_support.h"
 
@@ -20,10 +21,7 @@ using namespace multislit;
 
 namespace {
 
-const Reference& reference() {
-  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
-  return ref;
-}
+const Reference& reference() { return test::defaultReference(); }
 
 /// The walk on synthesized RDMaps (Simulator::groundTruth plus the extractor's noise).
 WalkConfig walkConfig(bool ball, bool cable) {

@@ -1,5 +1,6 @@
 // The RDMap synthesizer against the real thing: the same frame rendered and extracted.
 #include "multislit/sim/rdmap_synth.h"
+#include "default_reference.h"
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
 #include "multislit/sim/scenarios.h"
@@ -13,10 +14,7 @@ using namespace multislit;
 
 namespace {
 
-const Reference& reference() {
-  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
-  return ref;
-}
+const Reference& reference() { return test::defaultReference(); }
 
 struct Comparison {
   std::size_t extracted = 0, synthesized = 0, both = 0;

@@ -2,6 +2,7 @@
 // the rules of Reference::validate(), and the error names the file and the field. Each case below
 // once crashed or silently gave a wrong result.
 #include "multislit/reference.h"
+#include "default_reference.h"
 #include "multislit/sim/rdmap_synth.h"
 
 #include <gtest/gtest.h>
@@ -15,10 +16,7 @@ using namespace multislit;
 
 namespace {
 
-const Reference& good() {
-  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
-  return ref;
-}
+const Reference& good() { return test::defaultReference(); }
 
 const std::string& goodText() {
   static const std::string text = [] {

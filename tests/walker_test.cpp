@@ -2,6 +2,7 @@
 // robot stops for the ball thrown in front of its foot, turns away from the LAN cable, and no
 // footstep ever touches an object.
 #include "multislit/walker.h"
+#include "default_reference.h"
 #include "multislit/footsteps.h"
 #include "multislit/gait.h"
 #include "multislit/sim/rdmap_synth.h"
@@ -20,10 +21,7 @@ using namespace multislit;
 
 namespace {
 
-const Reference& reference() {
-  static const Reference ref = renderFloorReference(SensorConfig{}, MountConfig{});
-  return ref;
-}
+const Reference& reference() { return test::defaultReference(); }
 
 /// What a walk did, frame by frame, summed up.
 struct WalkLog {
