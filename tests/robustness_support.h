@@ -105,6 +105,18 @@ inline void printRow(const char* name, const Tally& s) {
       static_cast<double>(s.paper_found) / static_cast<double>(s.high));
 }
 
+// The figures of frame `t` of variant `i` in one line.
+inline void printFrame(int i, Kind kind, const Tally& t) {
+  std::printf(
+      "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu (missed: %zu %zu %zu; above the "
+      "threshold %zu/%zu) | false %zu (%zu near the object) of %zu (%zu on the truth), %zu "
+      "groups | paper: valid %zu (%zu on the truth) found %zu false %zu%s | %s\n",
+      i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
+      t.miss_within, t.miss_ungrouped, t.found_above, t.above, t.false_points, t.false_near,
+      t.valid, t.on_truth, t.false_groups, t.paper_valid, t.paper_on_truth, t.paper_found,
+      t.paper_false, t.paper_floor ? "" : " (no floor found)", t.photometry.c_str());
+}
+
 // The figures of `s` in one line.
 inline void printSummary(const char* name, const Tally& s) {
   std::printf(
@@ -235,11 +247,12 @@ inline void judgeCrossings(const Reference& ref, const RenderedFrame& f,
 
 // The photometry in short: floor, bit depth, speckle, stripe width, laser and ambient light.
 inline std::string describe(const Photometry& p) {
+  const bool untextured = p.floor.texture_amplitude == 0 && p.floor.grout_albedo == p.floor.albedo;
   char text[160];
-  std::snprintf(text, sizeof text,
-                "%s, %d bit, speckle %.2f, stripe x%.2f, laser %.2f, ambient %.2f",
-                floorTextureName(p.floor.texture), p.render.bit_depth, p.render.speckle_contrast,
-                p.render.stripe_width, p.render.laser_peak, p.render.ambient);
+  std::snprintf(
+      text, sizeof text, "%s, %d bit, speckle %.2f, stripe x%.2f, laser %.2f, ambient %.2f",
+      untextured ? "one albedo" : floorTextureName(p.floor.texture), p.render.bit_depth,
+      p.render.speckle_contrast, p.render.stripe_width, p.render.laser_peak, p.render.ambient);
   return text;
 }
 

@@ -38,8 +38,7 @@ using namespace multislit::robustness;
 // an object would shift it (tiles of variant 36: 8 of the ~18 false groups on empty floors).
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   const int variants = frameCount(40, 8), realizations = frameCount(2, 1);
-  Tally all, quiet;  // quiet: the frames whose sigma is the paper's 0.3 px or near it
-  Tally middle, noisy;
+  Tally all, quiet, middle, noisy;  // quiet: sigma is the paper's 0.3 px or near it
   all.frames = quiet.frames = middle.frames = noisy.frames = 0;
   for (int n = 0; n < variants * realizations; ++n) {
     const int i = n % variants, realization = n / variants;
@@ -47,14 +46,7 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     const Tally t = runVariant(i, kind, realization);
     EXPECT_EQ(t.reference_error, "") << "variant " << i;  // the reference is built on every one
     if (!t.reference_error.empty()) continue;
-    std::printf(
-        "%2d %-5s sigma %.2f | measured %zu/%zu | found %zu/%zu (missed: %zu %zu %zu; above the "
-        "threshold %zu/%zu) | false %zu (%zu near the object) of %zu (%zu on the truth), %zu "
-        "groups | paper: valid %zu (%zu on the truth) found %zu false %zu%s | %s\n",
-        i, kindName(kind), t.sigma, t.measured, t.clear, t.found, t.high, t.miss_unmeasured,
-        t.miss_within, t.miss_ungrouped, t.found_above, t.above, t.false_points, t.false_near,
-        t.valid, t.on_truth, t.false_groups, t.paper_valid, t.paper_on_truth, t.paper_found,
-        t.paper_false, t.paper_floor ? "" : " (no floor found)", t.photometry.c_str());
+    printFrame(i, kind, t);
     // Over 20 draws of the 40: at least 0.991 of the crossings that clear the paper's contrast
     // limit measured on every variant, and at least 0.983 of the paper's valid points (variant
     // 31; 238 of the 800 below the paper's count, the others at or above it).
@@ -151,11 +143,7 @@ TEST(Robustness, FortyPhotometriesOnUntexturedFloors) {
     const Tally t = runVariant(i, kind, 0, false);
     EXPECT_EQ(t.reference_error, "") << "variant " << i;
     if (!t.reference_error.empty()) continue;
-    std::printf(
-        "%2d %-5s sigma %.2f | found %zu/%zu | false %zu (%zu near the object) of %zu, %zu "
-        "groups | paper: found %zu false %zu%s\n",
-        i, kindName(kind), t.sigma, t.found, t.high, t.false_points, t.false_near, t.valid,
-        t.false_groups, t.paper_found, t.paper_false, t.paper_floor ? "" : " (no floor found)");
+    printFrame(i, kind, t);
     all.add(t);
     (t.sigma <= 0.7 ? quiet : noisy).add(t);
   }
