@@ -39,15 +39,6 @@ std::vector<std::string> photometryChoices() {
   return names;
 }
 
-// --photometry: a preset, "random" (drawn from --seed) or a photometry.yaml of an earlier run.
-Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
-  if (choice == "random") return randomPhotometry(seed);
-  const std::filesystem::path path(choice);
-  if (path.extension() == ".yaml" || path.extension() == ".yml")
-    return loadPhotometry(path.string());
-  return photometryPreset(choice);
-}
-
 void addSimulateOptions(cli::ArgParser& args) {
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");

@@ -8,6 +8,7 @@
 #include "output_file.h"
 #include "plot.h"
 #include "recording.h"
+#include "walk_csv.h"
 #include "walk_figures.h"
 
 #include "multislit/sim/walk.h"
@@ -37,6 +38,9 @@ void declareWalkOptions(cli::ArgParser& args) {
   args.option("cluster", "grid", "obstacle grouping: grid (RDMap neighbours) or euclidean");
   args.option("screw", "", "X,Y: add a screw head 6 mm across, 2 mm high, at world (X, Y) [m]");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("photometry", "",
+              "the images' light, speckle, stripes, floor and objects: a preset, random (drawn "
+              "from --seed) or a photometry YAML, as multislit simulate takes");
   args.option("record", "",
               "DIR: also write the walk as a recording (frames, odometry.csv, calibration.yaml) "
               "that multislit map --sequence DIR replays");
@@ -75,6 +79,10 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
                                                   Eigen::Vector3d(x, y, 0.002), 0.003));
   }
   try {
+    if (args.has("photometry") && !c.render)
+      throw std::invalid_argument("--photometry needs rendered images, not --synthesize");
+    if (args.has("photometry"))
+      applyPhotometry(choosePhotometry(args.str("photometry"), c.render_config.seed), c);
     c.validate();
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
@@ -105,6 +113,7 @@ struct Recorder {
   double measure_s = 0, process_s = 0;
   int ball_cleared = -1;  ///< first frame the map is free where the ball landed, after it left
   Eigen::Vector2d ball_spot = Eigen::Vector2d::Constant(NAN);
+  std::string photometry = "default";  ///< --photometry, as given
 };
 
 /// Whether the map holds an occupied voxel within 1 cm of the object, seen from above.
@@ -152,56 +161,30 @@ std::string describeMotion(const WalkFrame& f, const std::vector<SceneObject>& o
     const std::string what = w.check.cells.empty()
                                  ? "an obstacle"
                                  : objectAt(objects, w.check.cells.front().centre.head<2>());
-    std::snprintf(s, sizeof s, "turns %s in place (footstep %d ahead touches the %s in the map)",
-                  turn_direction > 0 ? "left" : "right", w.check.first_blocked + 1, what.c_str());
+    std::snprintf(s, sizeof s, "turns %s in place (footstep %d ahead touches %s in the map)",
+                  turn_direction > 0 ? "left" : "right", w.check.first_blocked + 1,
+                  what == "nothing" ? "a voxel where no object lies: a false obstacle"
+                                    : ("the " + what).c_str());
     return s;
   }
   if (w.reason == Reason::NoFloor) return "stops: no floor in the frame (fail safe)";
   if (w.obstacle) {
-    const Eigen::Vector2d at = f.body.toWorld(w.obstacle->centroid.head<2>());
-    std::snprintf(s, sizeof s,
-                  "stops for %.0f s: the %s appeared suddenly %.0f mm in front of the feet (%zu "
-                  "points, %.0f mm high)",
-                  stop_seconds, objectAt(objects, at).c_str(), 1e3 * w.obstacle->distance,
-                  w.obstacle->pointCount(), 1e3 * w.obstacle->height);
+    const std::string what = objectAt(objects, f.body.toWorld(w.obstacle->centroid.head<2>()));
+    std::snprintf(
+        s, sizeof s,
+        "stops for %.0f s: %s appeared suddenly %.0f mm in front of the feet (%zu "
+        "points, %.0f mm high)",
+        stop_seconds,
+        what == "nothing" ? "an obstacle where no object lies (false)" : ("the " + what).c_str(),
+        1e3 * w.obstacle->distance, w.obstacle->pointCount(), 1e3 * w.obstacle->height);
     return s;
   }
   return "stops";
 }
 
-void writeCsvHeader(std::ostream& csv) {
-  csv << "frame,time_s,x_m,y_m,yaw_deg,decision,reason,motion,floor_found,valid_points,"
-         "floor_std_px,obstacle_points,obstacles,nearest_m,map_occupied,map_voxels,map_bytes,"
-         "ball_lit,ball_detected,cable_lit,cable_detected,footstep,footstep_clearance_m\n";
-}
-
-void writeCsvLine(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map, double fps) {
-  std::size_t lit[2] = {0, 0}, detected[2] = {0, 0};
-  for (const ObjectView& o : f.objects) {
-    const int k = o.object.name == "pingpong_ball" ? 0 : o.object.name == "lan_cable" ? 1 : -1;
-    if (k < 0) continue;
-    lit[k] = o.lit_any;
-    detected[k] = o.detected;
-  }
-  char s[512];
-  std::snprintf(
-      s, sizeof s, "%llu,%.3f,%.4f,%.4f,%.2f,%s,%s,%s,%d,%zu,%.4f,%zu,%zu,%.4f,%zu,%zu,%zu,",
-      static_cast<unsigned long long>(f.frame), static_cast<double>(f.frame) / fps, f.body.x,
-      f.body.y, f.body.yaw / kDeg, commandName(f.walker.command), reasonName(f.walker.reason),
-      commandName(f.motion), f.floor.found ? 1 : 0, f.floor.valid_points, f.floor.residual_std,
-      f.obstacles.pointCount(), f.obstacles.obstacles.size(),
-      f.obstacles.obstacles.empty() ? NAN : f.obstacles.obstacles[0].distance, map.occupiedCount(),
-      map.leafCount(), map.memoryUsage());
-  csv << s << lit[0] << ',' << detected[0] << ',' << lit[1] << ',' << detected[1] << ',';
-  if (f.footstep)
-    csv << footName(f.footstep->foot) << ',' << f.footstep_clearance << '\n';
-  else
-    csv << ",\n";
-}
-
 void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
   const int k = static_cast<int>(f.frame);
-  writeCsvLine(*r.csv, f, walk.map(), walk.config().gait.frame_rate);
+  writeWalkCsvLine(*r.csv, f, walk.map(), walk.config().gait.frame_rate);
   r.obstacle_points.push_back(static_cast<double>(f.obstacles.pointCount()));
   r.measure_s += f.measure_seconds;
   r.process_s += f.process_seconds;
@@ -278,12 +261,12 @@ std::string summary(const Recorder& r, const WalkSimulation& walk, double second
   const int frames = static_cast<int>(walk.frame());
   std::snprintf(s, sizeof s,
                 "multislit walk: the paper's walking experiment (Sec. V) on the simulator\n"
-                "  %d frames at %.0f Hz of %s (seed %llu)\n"
+                "  %d frames at %.0f Hz of %s (seed %llu, photometry %s)\n"
                 "  HOAP-2: soles %.0f x %.0f mm, feet %.0f mm apart, %.0f mm steps of %.2f s "
                 "(%.0f mm/s), turns %.0f deg per step\n",
                 frames, c.gait.frame_rate,
                 c.render ? "rendered images" : "RDMaps synthesized from the ground truth",
-                static_cast<unsigned long long>(c.render_config.seed),
+                static_cast<unsigned long long>(c.render_config.seed), r.photometry.c_str(),
                 1e3 * c.pipeline.foot.foot_length, 1e3 * c.pipeline.foot.foot_width,
                 1e3 * c.pipeline.foot.foot_separation, 1e3 * c.pipeline.foot.step_length,
                 c.gait.step_frames / c.gait.frame_rate, 1e3 * c.gait.speed(c.pipeline.foot),
@@ -361,9 +344,10 @@ int runWalk(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   WalkSimulation walk(config);
   Recorder r;
+  if (args.has("photometry")) r.photometry = args.str("photometry");
   OutputFile csv(out / "obstacles.csv");  // whole or absent, as every output
   r.csv = &csv.stream();
-  writeCsvHeader(*r.csv);
+  writeWalkCsvHeader(*r.csv);
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");

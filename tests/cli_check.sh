@@ -26,6 +26,8 @@ refused_with 2 "--threshold-sigmas must be a finite number" \
   "$M" detect --calibration c.yaml --threshold-sigmas inf --out d.jsonl s/frame_000000.png
 refused_with 2 "--screw needs X,Y in metres" "$M" walk --screw nan,nan --out w
 refused_with 2 "--screw needs X,Y in metres" "$M" walk --screw 1,2,3 --out w
+refused_with 2 "unknown photometry 'sunny'; known: default," "$M" walk --photometry sunny --out w
+refused_with 2 "--photometry needs rendered images" "$M" walk --photometry tiles --synthesize --out w
 refused_with 2 "--frames must be a whole number in [1, 100000], not 0" "$M" bench --frames 0
 refused_with 2 "--passes must be a whole number in [1, 100000]" "$M" bench --passes 0
 refused_with 2 "--ahead must be a whole number in [1, 100000], not 0" "$M" emulate --walk --ahead 0

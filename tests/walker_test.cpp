@@ -276,3 +276,52 @@ TEST(Walker, ConfigErrorsNameTheField) {
   gait.step_frames = 1;
   EXPECT_THROW(gait.validate(), std::invalid_argument);
 }
+
+// A walk under a photometry: its floor and object surfaces reach the scene every frame, its light
+// reaches the renderer, and the walk's own noise seed stays.
+TEST(Walk, PhotometrySetsTheFloorTheObjectsAndTheLightButNotTheSeed) {
+  const Photometry translucent = photometryPreset("translucent-objects");
+  const Photometry tiles = photometryPreset("tiles");
+  WalkConfig config;
+  config.render_config.seed = 77;
+  applyPhotometry(tiles, config);
+  EXPECT_EQ(config.render_config.seed, 77u);
+  EXPECT_EQ(config.render_config.laser_peak, tiles.render.laser_peak);
+  EXPECT_EQ(config.scene.floor.texture, FloorTexture::Tiles);
+  applyPhotometry(translucent, config);
+  config.scene.extra.push_back(
+      SceneObject::cylinder("screw", {0.3, 0.0, 0.0}, {0.3, 0.0, 0.002}, 0.003));
+  WalkWorld world(config.scene);
+  Pose2D body;
+  for (const int frame : {0, config.scene.ball_frame}) {
+    const Scene& scene = world.sceneAt(static_cast<std::uint64_t>(frame), body);
+    EXPECT_EQ(scene.floor.texture, translucent.floor.texture);
+    EXPECT_EQ(scene.floor.albedo, translucent.floor.albedo);
+    ASSERT_EQ(scene.objects.size(), frame == 0 ? 2u : 3u);  // screw, cable (and the ball)
+    for (const SceneObject& o : scene.objects) {
+      EXPECT_EQ(o.albedo, translucent.object_albedo) << o.name;
+      EXPECT_EQ(o.stripe_width, translucent.object_stripe_width) << o.name;
+    }
+  }
+  // Without a photometry each object keeps its own surface: the ball 0.85, the cable 0.35.
+  WalkWorld plain{WalkSceneConfig{}};
+  for (const SceneObject& o : plain.sceneAt(300, body).objects) {
+    EXPECT_EQ(o.albedo, o.name == "pingpong_ball" ? 0.85 : 0.35) << o.name;
+    EXPECT_EQ(o.stripe_width, 1.0) << o.name;
+  }
+}
+
+TEST(Walk, SurfaceErrorsNameTheField) {
+  const auto message = [](auto change) { return validationMessage<WalkSceneConfig>(change); };
+  EXPECT_NE(message([](WalkSceneConfig& c) {
+              c.object_stripe_width = 5;
+            }).find("WalkSceneConfig.object_stripe_width"),
+            std::string::npos);
+  EXPECT_NE(message([](WalkSceneConfig& c) {
+              c.object_albedo = 1.5;
+            }).find("WalkSceneConfig.object_albedo"),
+            std::string::npos);
+  EXPECT_NE(message([](WalkSceneConfig& c) { c.floor.albedo = -0.1; }).find("albedo"),
+            std::string::npos);
+  EXPECT_EQ(message([](WalkSceneConfig& c) { c.object_stripe_width = 0.5; }), "valid");
+}

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <stdexcept>
@@ -236,6 +237,14 @@ Photometry randomPhotometry(uint64_t seed) {
   p.render.seed = seed;
   p.validate();
   return p;
+}
+
+Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
+  if (choice == "random") return randomPhotometry(seed);
+  const std::filesystem::path path(choice);
+  if (path.extension() == ".yaml" || path.extension() == ".yml")
+    return loadPhotometry(path.string());
+  return photometryPreset(choice);
 }
 
 RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene) {

@@ -23,12 +23,14 @@ void RDMapSynthesizerConfig::validate() const {
 }
 
 Reference renderFloorReference(const SensorConfig& sensor, const MountConfig& reference_mount,
-                               const RenderConfig& render) {
+                               const RenderConfig& render, const FloorConfig& floor) {
   const Simulator simulator(sensor, render);
   ReferenceConfig config;
   config.expected_slits = sensor.projector.slit_count;  // the sensor's own count, not the paper's
+  Scene bare;
+  bare.floor = floor;
   Reference reference =
-      Reference::fromImage(simulator.renderReference(Scene{}, reference_mount).image, config);
+      Reference::fromImage(simulator.renderReference(bare, reference_mount).image, config);
   reference.setNominalScale(sensor, reference_mount);
   return reference;
 }

@@ -32,12 +32,29 @@ void WalkSceneConfig::validate() const {
   require((cable_end - cable_start).norm() > cable_diameter, "cable_end",
           "must be apart from cable_start");
   for (const SceneObject& o : extra) o.validate();
+  Scene bare;
+  bare.floor = floor;
+  bare.validate();
+  require(object_albedo <= 1, "object_albedo", "must be <= 1 (< 0: each object's own)");
+  require(object_stripe_width < 0 || (object_stripe_width >= 0.25 && object_stripe_width <= 4),
+          "object_stripe_width", "must be in [0.25, 4] (< 0: each object's own)");
+}
+
+void applyPhotometry(const Photometry& photometry, WalkConfig& config) {
+  photometry.validate();
+  const std::uint64_t seed = config.render_config.seed;
+  config.render_config = photometry.render;
+  config.render_config.seed = seed;
+  config.scene.floor = photometry.floor;
+  config.scene.object_albedo = photometry.object_albedo;
+  config.scene.object_stripe_width = photometry.object_stripe_width;
 }
 
 WalkWorld::WalkWorld(const WalkSceneConfig& config, double frame_rate)
     : config_(config), frame_rate_(frame_rate) {
   config_.validate();
   detail::require(frame_rate > 0, "WalkWorld frame_rate", "must be > 0 Hz");
+  scene_.floor = config_.floor;
 }
 
 const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
@@ -49,7 +66,8 @@ const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
         Eigen::Vector3d(config_.cable_end.x(), config_.cable_end.y(), r), r));
     scene_.objects.back().albedo = 0.35;
   }
-  if (!config_.ball || frame < static_cast<std::uint64_t>(config_.ball_frame)) return scene_;
+  if (!config_.ball || frame < static_cast<std::uint64_t>(config_.ball_frame))
+    return withSurfaces();
   if (!ball_landed_) {  // thrown in just in front of the foot, it rolls away to the left later
     const Eigen::Vector2d at = body.toWorld(config_.ball_landing);
     ball_landed_ = Eigen::Vector3d(at.x(), at.y(), kBallRadius);
@@ -63,6 +81,14 @@ const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
     scene_.objects.push_back(
         SceneObject::sphere("pingpong_ball", *ball_landed_ + rolled * ball_roll_, kBallRadius));
     scene_.objects.back().albedo = 0.85;
+  }
+  return withSurfaces();
+}
+
+const Scene& WalkWorld::withSurfaces() {
+  for (SceneObject& o : scene_.objects) {
+    if (config_.object_albedo >= 0) o.albedo = config_.object_albedo;
+    if (config_.object_stripe_width >= 0) o.stripe_width = config_.object_stripe_width;
   }
   return scene_;
 }
@@ -91,7 +117,7 @@ WalkSimulation::WalkSimulation(const WalkConfig& config, std::optional<Reference
   config_.validate();
   if (!reference)
     reference = renderFloorReference(config_.pipeline.sensor, config_.reference_mount,
-                                     config_.render_config);
+                                     config_.render_config, config_.scene.floor);
   if (config_.render) {
     simulator_ = std::make_unique<Simulator>(config_.pipeline.sensor, config_.render_config);
     extractor_ = std::make_unique<Extractor>(std::move(*reference));

@@ -35,6 +35,11 @@ Photometry photometryPreset(const std::string& name);
 /// the background). Deterministic: the same seed gives the same photometry, render.seed = seed.
 Photometry randomPhotometry(uint64_t seed);
 
+/// What a command line names: a preset, "random" (randomPhotometry(seed)) or the path of a
+/// photometry YAML (.yaml or .yml, from savePhotometry). Throws std::invalid_argument listing the
+/// presets for any other name.
+Photometry choosePhotometry(const std::string& choice, uint64_t seed);
+
 /// Puts the floor and the object surfaces of `photometry` into `scene` (shapes untouched) and
 /// returns the render configuration to use with it.
 RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene);

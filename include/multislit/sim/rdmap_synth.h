@@ -30,11 +30,12 @@ struct RDMapSynthesizerConfig {
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
-/// The reference of the bare floor seen from `reference_mount`: slits found in a rendered image,
-/// with the sensor model's metric scale (Reference::setNominalScale). What the Extractor and the
-/// synthesizer of a simulated walk use; costs one rendering.
+/// The reference of the bare floor (`floor`: its albedo, texture and gloss) seen from
+/// `reference_mount`: slits found in a rendered image, with the sensor model's metric scale
+/// (Reference::setNominalScale). What the Extractor and the synthesizer of a simulated walk use;
+/// costs one rendering.
 Reference renderFloorReference(const SensorConfig& sensor, const MountConfig& reference_mount,
-                               const RenderConfig& render = {});
+                               const RenderConfig& render = {}, const FloorConfig& floor = {});
 
 /// Builds the organized cloud Extractor::extract() would give for a frame, from
 /// Simulator::groundTruth(): one cloud row per reference slit, one column per reference row; a

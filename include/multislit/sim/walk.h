@@ -7,6 +7,7 @@
 #include "multislit/gait.h"
 #include "multislit/pipeline.h"
 #include "multislit/reference.h"
+#include "multislit/sim/photometry.h"
 #include "multislit/sim/rdmap_synth.h"
 #include "multislit/sim/scene.h"
 #include "multislit/sim/simulator.h"
@@ -40,6 +41,12 @@ struct WalkSceneConfig {
   Eigen::Vector2d cable_end = Eigen::Vector2d(0.97, 0.05);     ///< [m]
   double cable_diameter = 0.007;                               ///< [m]
   std::vector<SceneObject> extra;  ///< more objects, always there (world frame)
+  FloorConfig floor;               ///< the floor's albedo, texture and gloss (a photometry's)
+  /// Every object's albedo, as a photometry sets it; < 0: each keeps its own (the ball 0.85, the
+  /// cable 0.35).
+  double object_albedo = -1.0;
+  /// Factor on the sheet's width on every object; < 0: each keeps its own [-].
+  double object_stripe_width = -1.0;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -52,6 +59,8 @@ class WalkWorld {
   const Scene& sceneAt(std::uint64_t frame, const Pose2D& body);
 
  private:
+  const Scene& withSurfaces();  ///< the objects' albedo and stripe width set as configured
+
   WalkSceneConfig config_;
   double frame_rate_;
   Scene scene_;
@@ -74,6 +83,10 @@ struct WalkConfig {
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
+
+/// A walk under `photometry`: its floor and object surfaces into config.scene, its light, speckle,
+/// stripes, noise and bit depth into config.render_config (config's noise seed is kept).
+void applyPhotometry(const Photometry& photometry, WalkConfig& config);
 
 /// One object of the scene in one frame, against the ground truth.
 struct ObjectView {
