@@ -193,9 +193,7 @@ void drawFloor(Draw& d, FloorConfig& f) {
 
 void Photometry::validate() const {
   render.validate();
-  Scene scene;
-  scene.floor = floor;
-  scene.validate();
+  floor.validate();
   if (!(object_albedo < 0 || object_albedo <= 1))
     throw std::invalid_argument("photometry: object_albedo must be <= 1 (< 0: keep)");
   if (!(object_stripe_width >= 0.25 && object_stripe_width <= 4))

@@ -250,24 +250,27 @@ std::string Scene::objectName(int object) const {
   return "none";
 }
 
-void Scene::validate() const {
-  if (!(floor.albedo > 0 && floor.albedo <= 1))
+void FloorConfig::validate() const {
+  if (!(albedo > 0 && albedo <= 1))
     throw std::invalid_argument("scene: floor.albedo must be in (0, 1]");
-  if (!(floor.texture_amplitude >= 0 && floor.texture_amplitude < 1))
+  if (!(texture_amplitude >= 0 && texture_amplitude < 1))
     throw std::invalid_argument("scene: floor.texture_amplitude must be in [0, 1)");
-  if (!(floor.texture_scale > 0 && floor.texture_scale <= kMaxSize))
+  if (!(texture_scale > 0 && texture_scale <= kMaxSize))
     throw std::invalid_argument("scene: floor.texture_scale must be in (0, 100] m");
-  if (!(floor.grout_width >= 0 &&
-        (floor.texture != FloorTexture::Tiles || floor.grout_width < 0.5 * floor.texture_scale)))
+  if (!(grout_width >= 0 && (texture != FloorTexture::Tiles || grout_width < 0.5 * texture_scale)))
     throw std::invalid_argument("scene: floor.grout_width must be in [0, texture_scale / 2)");
-  if (!(floor.grout_albedo >= 0 && floor.grout_albedo <= 1))
+  if (!(grout_albedo >= 0 && grout_albedo <= 1))
     throw std::invalid_argument("scene: floor.grout_albedo must be in [0, 1]");
-  if (!(floor.laser_albedo > 0 && floor.laser_albedo <= 1))
+  if (!(laser_albedo > 0 && laser_albedo <= 1))
     throw std::invalid_argument("scene: floor.laser_albedo must be in (0, 1]");
-  if (!(floor.gloss >= 0 && floor.gloss <= 10))
+  if (!(gloss >= 0 && gloss <= 10))
     throw std::invalid_argument("scene: floor.gloss must be in [0, 10]");
-  if (!(floor.stripe_width >= 0.25 && floor.stripe_width <= 4))
+  if (!(stripe_width >= 0.25 && stripe_width <= 4))
     throw std::invalid_argument("scene: floor.stripe_width must be in [0.25, 4]");
+}
+
+void Scene::validate() const {
+  floor.validate();
   if (objects.size() > kMaxObjects)
     throw std::invalid_argument("scene: " + std::to_string(objects.size()) +
                                 " objects, more than the limit of " + std::to_string(kMaxObjects));

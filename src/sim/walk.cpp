@@ -32,9 +32,7 @@ void WalkSceneConfig::validate() const {
   require((cable_end - cable_start).norm() > cable_diameter, "cable_end",
           "must be apart from cable_start");
   for (const SceneObject& o : extra) o.validate();
-  Scene bare;
-  bare.floor = floor;
-  bare.validate();
+  floor.validate();
   require(object_albedo <= 1, "object_albedo", "must be <= 1 (< 0: each object's own)");
   require(object_stripe_width < 0 || (object_stripe_width >= 0.25 && object_stripe_width <= 4),
           "object_stripe_width", "must be in [0.25, 4] (< 0: each object's own)");

@@ -57,6 +57,9 @@ struct FloorConfig {
       1.0;             ///< share of the diffuse reflectance the laser gets back (glossy < 1) [-]
   double gloss = 0.0;  ///< glare of a ceiling lamp mirrored by the floor, peak over albedo [-]
   double stripe_width = 1.0;  ///< factor on the sheet's width as seen on the floor (carpet > 1) [-]
+
+  void validate()
+      const;  ///< throws std::invalid_argument naming the field ("scene: floor.<field>")
 };
 
 /// "wood", "tiles", "carpet"; and back (throws std::invalid_argument for other names).
