@@ -245,13 +245,17 @@ Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
   return photometryPreset(choice);
 }
 
+void setObjectSurfaces(std::vector<SceneObject>& objects, double albedo, double stripe_width) {
+  for (SceneObject& o : objects) {
+    if (albedo >= 0) o.albedo = albedo;
+    if (stripe_width >= 0) o.stripe_width = stripe_width;
+  }
+}
+
 RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene) {
   photometry.validate();
   scene.floor = photometry.floor;
-  for (SceneObject& o : scene.objects) {
-    if (photometry.object_albedo >= 0) o.albedo = photometry.object_albedo;
-    o.stripe_width = photometry.object_stripe_width;
-  }
+  setObjectSurfaces(scene.objects, photometry.object_albedo, photometry.object_stripe_width);
   return photometry.render;
 }
 

@@ -84,10 +84,7 @@ const Scene& WalkWorld::sceneAt(std::uint64_t frame, const Pose2D& body) {
 }
 
 const Scene& WalkWorld::withSurfaces() {
-  for (SceneObject& o : scene_.objects) {
-    if (config_.object_albedo >= 0) o.albedo = config_.object_albedo;
-    if (config_.object_stripe_width >= 0) o.stripe_width = config_.object_stripe_width;
-  }
+  setObjectSurfaces(scene_.objects, config_.object_albedo, config_.object_stripe_width);
   return scene_;
 }
 

@@ -40,6 +40,10 @@ Photometry randomPhotometry(uint64_t seed);
 /// presets for any other name.
 Photometry choosePhotometry(const std::string& choice, uint64_t seed);
 
+/// Sets every object's albedo to `albedo` and its stripe width factor to `stripe_width`; a value
+/// < 0 leaves each object its own.
+void setObjectSurfaces(std::vector<SceneObject>& objects, double albedo, double stripe_width);
+
 /// Puts the floor and the object surfaces of `photometry` into `scene` (shapes untouched) and
 /// returns the render configuration to use with it.
 RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene);
