@@ -136,9 +136,11 @@ bool mapped(const OccupancyMap& map, const SceneObject& o) {
   return false;
 }
 
-/// The true object that explains a place best (nearest seen from above).
-std::string objectAt(const std::vector<SceneObject>& objects, const Eigen::Vector2d& at) {
-  std::string name = "nothing";
+/// The true object that explains a place best (nearest seen from above, within 5 cm), as "the
+/// <name>"; `if_none` where no object lies (a false obstacle).
+std::string theObjectAt(const std::vector<SceneObject>& objects, const Eigen::Vector2d& at,
+                        const std::string& if_none) {
+  std::string name = if_none;
   double best = 0.05;
   Footprint point;
   point.centre = at;
@@ -146,7 +148,7 @@ std::string objectAt(const std::vector<SceneObject>& objects, const Eigen::Vecto
     const double d = clearance(point, o);
     if (d < best) {
       best = d;
-      name = o.name;
+      name = "the " + o.name;
     }
   }
   return name;
@@ -160,23 +162,21 @@ std::string describeMotion(const WalkFrame& f, const std::vector<SceneObject>& o
   if (f.motion == Command::Turn) {
     const std::string what = w.check.cells.empty()
                                  ? "an obstacle"
-                                 : objectAt(objects, w.check.cells.front().centre.head<2>());
+                                 : theObjectAt(objects, w.check.cells.front().centre.head<2>(),
+                                               "a voxel where no object lies: a false obstacle");
     std::snprintf(s, sizeof s, "turns %s in place (footstep %d ahead touches %s in the map)",
-                  turn_direction > 0 ? "left" : "right", w.check.first_blocked + 1,
-                  what == "nothing" ? "a voxel where no object lies: a false obstacle"
-                                    : ("the " + what).c_str());
+                  turn_direction > 0 ? "left" : "right", w.check.first_blocked + 1, what.c_str());
     return s;
   }
   if (w.reason == Reason::NoFloor) return "stops: no floor in the frame (fail safe)";
   if (w.obstacle) {
-    const std::string what = objectAt(objects, f.body.toWorld(w.obstacle->centroid.head<2>()));
-    std::snprintf(
-        s, sizeof s,
-        "stops for %.0f s: %s appeared suddenly %.0f mm in front of the feet (%zu "
-        "points, %.0f mm high)",
-        stop_seconds,
-        what == "nothing" ? "an obstacle where no object lies (false)" : ("the " + what).c_str(),
-        1e3 * w.obstacle->distance, w.obstacle->pointCount(), 1e3 * w.obstacle->height);
+    const std::string what = theObjectAt(objects, f.body.toWorld(w.obstacle->centroid.head<2>()),
+                                         "an obstacle where no object lies (false)");
+    std::snprintf(s, sizeof s,
+                  "stops for %.0f s: %s appeared suddenly %.0f mm in front of the feet (%zu "
+                  "points, %.0f mm high)",
+                  stop_seconds, what.c_str(), 1e3 * w.obstacle->distance, w.obstacle->pointCount(),
+                  1e3 * w.obstacle->height);
     return s;
   }
   return "stops";
