@@ -153,9 +153,10 @@ TEST(Robustness, FortyPhotometriesOnUntexturedFloors) {
   printSummary("untextured, sigma > 0.7 px", noisy);
   // Over 6 draws of the 40 (10 of the first 8, as the sanitizers run them), frames of sigma
   // <= 0.7 px: false points away from the objects 0.036 +- 0.009 % of valid (first 8: 0.039 +-
-  // 0.030 %), with those lit within 15 mm of an object 0.215 +- 0.008 %; recall of >= 5 mm
-  // crossings 0.924 +- 0.009 (first 8: 0.976 +- 0.009), the paper's method 0.909 +- 0.008 with
-  // 5.5 % false points. All frames: 0.347 +- 0.024 % false points, recall 0.895 +- 0.010.
+  // 0.030 %), all false points 0.215 +- 0.008 % (the rest lit within 15 mm of an object); recall
+  // of >= 5 mm crossings 0.924 +- 0.009 (first 8: 0.976 +- 0.009), the paper's method 0.909 +-
+  // 0.008 with 5.5 % false points. All frames: 0.347 +- 0.024 % false points, recall 0.895 +-
+  // 0.010.
   EXPECT_LE((quiet.false_points - quiet.false_near) * 10000, quiet.valid * (kSanitized ? 15 : 10));
   EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 95 : 89));
   if (!kSanitized) {
