@@ -4,6 +4,7 @@
 #include "multislit/extractor.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -78,8 +79,7 @@ TEST(Extractor, TwelveBitDataMeasuresWithItsFullScale) {
   const RenderedFrame f = renderScenario(makeScenario("cond4"), 9, simulator16());
   expectMeasuredAsTheTruth(ex, twelve(f.image), f.truth);
   // The full scale goes through the calibration file.
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "multislit_twelve_bit.yaml").string();
+  const std::string path = tempPath("multislit_twelve_bit.yaml");
   ref.save(path);
   EXPECT_EQ(Reference::load(path).full_scale, 4095);
   std::filesystem::remove(path);

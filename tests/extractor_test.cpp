@@ -108,7 +108,7 @@ TEST(Reference, SaysWhatItFoundWhenTheSlitsAreWrong) {
 
 TEST(Reference, YamlRoundTripAndCameraMismatch) {
   const Reference& ref = reference();
-  const std::string path = (std::filesystem::temp_directory_path() / "multislit_ref.yaml").string();
+  const std::string path = tempPath("multislit_ref.yaml");
   ref.save(path);
   const Reference back = Reference::load(path);
   ASSERT_EQ(back.slits.size(), ref.slits.size());

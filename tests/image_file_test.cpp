@@ -1,6 +1,7 @@
 // Image files: the size read from the header of every format the commands take, before decoding;
 // images too large, cut, of other formats or types refused naming the file.
 #include "multislit/image_file.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -14,10 +15,6 @@
 using namespace multislit;
 
 namespace {
-
-std::string tempPath(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("multislit_image_" + name)).string();
-}
 
 std::string readError(const std::string& path) {
   try {

@@ -122,7 +122,7 @@ TEST(OccupancyMap, BallThatRolledAwayIsClearedAndTheMapReloadsFromBt) {
   const WalkSceneConfig& scene = walk.config().scene;
   Eigen::Vector2d landed = Eigen::Vector2d::Zero();
   std::size_t while_there = 0;
-  const std::string path = ::testing::TempDir() + "occupancy_map_test.bt";
+  const std::string path = tempPath("occupancy_map_test.bt");
   for (int k = 0; k <= scene.ball_roll_frame + 80; ++k) {
     const WalkFrame f = walk.step();
     if (k == scene.ball_frame) landed = f.body.toWorld(scene.ball_landing);

@@ -2,6 +2,7 @@
 // file (gaps, reversed or repeated stamps, NaN, short rows, a wrong header) refused with the file,
 // line and field named.
 #include "multislit/odometry.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +16,7 @@ using namespace multislit;
 namespace {
 
 std::filesystem::path writeFile(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / ("multislit_odometry_" + name);
+  const auto path = std::filesystem::path(tempPath("multislit_odometry_" + name));
   std::ofstream(path) << text;
   return path;
 }
@@ -44,7 +45,7 @@ TEST(Odometry, SavedFileReadsBackTheSamePoses) {
   for (int k = 0; k < 50; ++k)
     samples.push_back({static_cast<std::uint64_t>(1700000000000000 + 33333 * k),
                        pose(0.01 * k, -0.002 * k, 0.03 * k - 0.7)});
-  const auto path = std::filesystem::temp_directory_path() / "multislit_odometry_roundtrip.csv";
+  const auto path = std::filesystem::path(tempPath("multislit_odometry_roundtrip.csv"));
   saveOdometry(path.string(), samples);
   const Odometry odometry = Odometry::load(path.string());
   ASSERT_EQ(odometry.samples().size(), samples.size());

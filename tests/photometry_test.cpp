@@ -2,6 +2,7 @@
 // draws) measured on renders of a 320 x 240 window of the paper's sensor, against exact truth.
 #include "multislit/sim/photometry.h"
 #include "multislit/sim/scenarios.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -260,7 +261,8 @@ TEST(Photometry, PresetsAndRandomDrawsAreValidAndDeterministic) {
   for (const std::string& name : photometryPresetNames())
     EXPECT_EQ(photometryPreset(name).name, name);
   EXPECT_THROW(photometryPreset("sunny"), std::invalid_argument);
-  const std::string dir = std::filesystem::temp_directory_path().string();
+  const std::string dir = tempPath("round_trip");
+  std::filesystem::create_directories(dir);
   int gamma_speckle = 0, curved = 0, sixteen = 0, glossy = 0, textures[3] = {0, 0, 0};
   for (uint64_t seed = 1; seed <= 60; ++seed) {
     const Photometry p = randomPhotometry(seed);
@@ -322,8 +324,7 @@ TEST(Photometry, RandomDrawsKeepTheFloorStripeMeasurableAndRenderTheSameBytes) {
 }
 
 TEST(Photometry, FilesWithUnknownKeysOrValuesOutOfRangeAreRefusedNamingTheField) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "multislit_photometry_bad.yaml").string();
+  const std::string path = tempPath("multislit_photometry_bad.yaml");
   savePhotometry(photometryPreset("speckle"), path);
   const std::string good = fileText(path);
   // (replacement line, message part): the saved file with one line changed or added.

@@ -95,7 +95,7 @@ WalkRun replay(const std::filesystem::path& dir) {
 
 TEST(Pipeline, ReplayedRecordingOfAWalkGivesTheWalksOccupiedVoxels) {
   const int frames = frameCount(40, 14);
-  const auto dir = std::filesystem::temp_directory_path() / "multislit_pipeline_replay";
+  const auto dir = std::filesystem::path(tempPath("multislit_pipeline_replay"));
   std::filesystem::remove_all(dir);
   const WalkRun walked = walkAndRecord(dir, frames);
   const WalkRun replayed = replay(dir);

@@ -4,6 +4,7 @@
 #include "multislit/reference.h"
 #include "default_reference.h"
 #include "multislit/sim/rdmap_synth.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,7 @@ const Reference& good() { return test::defaultReference(); }
 
 const std::string& goodText() {
   static const std::string text = [] {
-    const auto path = std::filesystem::temp_directory_path() / "multislit_reference_good.yaml";
+    const auto path = std::filesystem::path(tempPath("multislit_reference_good.yaml"));
     good().save(path.string());
     std::stringstream s;
     s << std::ifstream(path).rdbuf();
@@ -51,7 +52,7 @@ std::string edited(const std::string& key, const std::string& line) {
 /// The error of loading `text` written to a file called `name` ("" when it loads).
 std::string loadError(const std::string& name, const std::string& text) {
   EXPECT_NE(text, goodText()) << name;
-  const auto path = std::filesystem::temp_directory_path() / ("multislit_reference_" + name);
+  const auto path = std::filesystem::path(tempPath("multislit_reference_" + name));
   std::ofstream(path) << text;
   try {
     Reference::load(path.string());
@@ -65,7 +66,7 @@ std::string loadError(const std::string& name, const std::string& text) {
 
 TEST(Reference, TheGoodCalibrationLoadsAndValidates) {
   EXPECT_NO_THROW(good().validate());
-  const auto path = std::filesystem::temp_directory_path() / "multislit_reference_good.yaml";
+  const auto path = std::filesystem::path(tempPath("multislit_reference_good.yaml"));
   goodText();
   const Reference back = Reference::load(path.string());
   EXPECT_EQ(back.slits.size(), good().slits.size());

@@ -1,6 +1,7 @@
 // Ray casting against the scene primitives, and scene files.
 #include "multislit/sim/scene.h"
 #include "multislit/sim/scenarios.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -82,8 +83,7 @@ TEST(Scene, FloorTextureStaysInRangeForAnyScaleAndDistance) {
 
 TEST(Scene, YamlRoundTripAndBadFieldsNamed) {
   const Scenario s = makeScenario("fig8");
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "multislit_scene.yaml").string();
+  const std::string path = tempPath("multislit_scene.yaml");
   s.scene.save(path);
   const Scene back = Scene::load(path);
   ASSERT_EQ(back.objects.size(), s.scene.objects.size());
@@ -164,8 +164,7 @@ TEST(Scene, SurfacePhotometryRoundTripsThroughYaml) {
   s.scene.floor.laser_albedo = 0.4;
   s.scene.floor.stripe_width = 1.3;
   s.scene.objects[0].stripe_width = 2.0;
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "multislit_scene_photometry.yaml").string();
+  const std::string path = tempPath("multislit_scene_photometry.yaml");
   s.scene.save(path);
   const Scene back = Scene::load(path);
   EXPECT_EQ(back.floor.texture, FloorTexture::Tiles);
@@ -194,8 +193,7 @@ namespace {
 // What Scene::load says of a file whose body (after the YAML header) is `body`: its message, or
 // "loaded".
 std::string loadMessage(const std::string& body) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "multislit_scene_bad.yaml").string();
+  const std::string path = tempPath("multislit_scene_bad.yaml");
   std::ofstream(path) << "%YAML:1.0\n---\n" << body;
   try {
     Scene::load(path);

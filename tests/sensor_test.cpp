@@ -1,5 +1,6 @@
 // Sensor geometry: projections, slit surfaces, mount, configuration files.
 #include "multislit/sensor.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +15,6 @@ using multislit::SensorConfig;
 using multislit::SensorGeometry;
 
 namespace {
-
-std::string tempPath(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / ("multislit_sensor_test_" + name)).string();
-}
 
 std::string validationMessage(const SensorConfig& c) {
   try {

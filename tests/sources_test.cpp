@@ -3,6 +3,7 @@
 #include "multislit/sources.h"
 #include "camera_test_support.h"
 #include "multislit/sim/simulated_source.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
@@ -23,8 +24,7 @@ using namespace test;
 using std::chrono::milliseconds;
 
 fs::path freshFolder(const std::string& name) {
-  const fs::path dir = fs::path(testing::TempDir()) /
-                       ("multislit_sources_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir = tempPath("multislit_sources_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
