@@ -2,6 +2,7 @@
 #include "multislit/plane_model.h"
 
 #include "config_check.h"
+#include "map_evidence.h"
 
 #include <octomap/octomap_utils.h>
 
@@ -15,6 +16,8 @@
 #include <utility>
 
 namespace multislit {
+
+using detail::FrameEvidence;
 
 namespace {
 
@@ -70,114 +73,15 @@ void OccupancyMapConfig::validate() const {
   require(max_height > resolution, "max_height", "must be > resolution");
   require(window_half_size > 0, "window_half_size", "must be > 0 m");
   require(crop_interval >= 1, "crop_interval", "must be >= 1 frame");
-}
-
-/// One frame's evidence: a mark per point (its voxel and kind) and per cell of a light ray, as
-/// (packed key << 2 | kind) so that sorting gathers the marks of each voxel.
-struct OccupancyMap::FrameEvidence {
-  enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kWeak = 2, kHit = 3 };
-  std::vector<std::uint64_t> marks;
-  octomap::KeyRay ray;  ///< (allocates room for 100 000 keys: made once)
-  /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
-  struct Slit {
-    double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
-    std::size_t count = 0;    ///< its floor points
-    std::uint32_t first = 0;  ///< first column with a floor point
-    std::uint32_t last = 0;   ///< last column with a floor point
-    double weak = 0.0;        ///< residual from which a point is weak [px]
-  };
-  std::vector<Slit> slits;
-  std::vector<double> residual;          ///< per cloud point (floor inliers only) [px]
-  std::vector<std::uint8_t> weak_point;  ///< per cloud point: weak, in a run long enough
-  /// Voxels whose leaf is at the lower clamping bound: a miss cannot change them (octomap's
-  /// updateNode() would search the tree to find that out), so it is skipped. Kept across frames;
-  /// emptied when the tree is rebuilt by crop().
-  std::unordered_set<std::uint64_t> saturated_free;
-
-  void mark(const octomap::OcTreeKey& key, Kind kind) {
-    const std::uint64_t m =
-        (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32) << 2 |
-        kind;
-    // The points of a slit come in order, several per voxel: a repeat of the last mark adds
-    // nothing (except for weak points, which are counted), and leaves less to sort.
-    if (kind != kWeak && !marks.empty() && marks.back() == m) return;
-    marks.push_back(m);
-  }
-  static octomap::OcTreeKey keyOf(std::uint64_t mark) {
-    return octomap::OcTreeKey(static_cast<octomap::key_type>(mark >> 2),
-                              static_cast<octomap::key_type>(mark >> 18),
-                              static_cast<octomap::key_type>(mark >> 34));
-  }
-
-  /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
-  /// mean), and where each slit's measured points end (a profile cut by the slit's end is biased):
-  /// `slits` and, per floor inlier, `residual`.
-  void measureSlits(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
-                    const OccupancyMapConfig& config);
-  /// `weak_point`: the floor inliers high above the plane for their slit and away from its ends,
-  /// in runs of min_weak_run consecutive points along the slit: an object lifts every row that
-  /// crosses it, while noise lifts one row or a pair. After measureSlits().
-  void flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
-                           const OccupancyMapConfig& config);
-};
-
-void OccupancyMap::FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud,
-                                               const FloorResult& floor,
-                                               const OccupancyMapConfig& config) {
-  const std::size_t rows = cloud.height, width = cloud.width;
-  slits.assign(rows, Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
-  residual.resize(cloud.size());
-  for (const auto i : floor.inliers) {
-    const auto idx = static_cast<std::size_t>(i);
-    Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
-    const double r = planeResidual(cloud[idx], floor.plane);
-    residual[idx] = r;
-    slit.sum_sq += r * r;
-    ++slit.count;
-    slit.first = std::min(slit.first, col);
-    slit.last = std::max(slit.last, col);
-  }
-  for (Slit& slit : slits) {
-    const double sigma = slit.count > 1 ? std::sqrt(slit.sum_sq / static_cast<double>(slit.count))
-                                        : floor.residual_std;
-    slit.weak = config.weak_sigmas * std::max(sigma, config.min_sigma);
-  }
-}
-
-void OccupancyMap::FrameEvidence::flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud,
-                                                      const FloorResult& floor,
-                                                      const OccupancyMapConfig& config) {
-  const std::size_t rows = cloud.height, width = cloud.width;
-  const auto end = static_cast<std::uint32_t>(config.weak_end_margin);
-  weak_point.assign(cloud.size(), 0);
-  for (const auto i : floor.inliers) {
-    const auto idx = static_cast<std::size_t>(i);
-    const Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
-    weak_point[idx] =
-        residual[idx] >= slit.weak && col >= slit.first + end && col + end <= slit.last;
-  }
-  const auto run = static_cast<std::size_t>(config.min_weak_run);
-  for (std::size_t row = 0; row < rows; ++row) {
-    std::uint8_t* flags = weak_point.data() + row * width;
-    for (std::size_t col = 0; col < width;) {
-      if (!flags[col]) {
-        ++col;
-        continue;
-      }
-      std::size_t stop = col;
-      while (stop < width && flags[stop]) ++stop;
-      if (stop - col < run) std::fill(flags + col, flags + stop, std::uint8_t{0});
-      col = stop;
-    }
-  }
+  sweep.validate();
 }
 
 OccupancyMap::OccupancyMap(const OccupancyMapConfig& config) : config_(config) {
   config_.validate();
   tree_ = makeTree();
-  evidence_ = std::make_unique<FrameEvidence>();
+  evidence_ = std::make_unique<detail::FrameEvidence>();
+  slit_sweep_ = std::make_unique<detail::SlitSweep>();
+  sweep_ = std::make_unique<SweepEvidence>(config_.sweep);
   log_hit_ = octomap::logodds(config_.prob_hit);
   log_weak_ = octomap::logodds(config_.prob_weak_hit);
   log_miss_ = octomap::logodds(config_.prob_miss);
@@ -205,6 +109,8 @@ MapUpdateStats OccupancyMap::insertFrame(const pcl::PointCloud<PointRDM>& cloud,
   if (!floor.found || !obstacles.floor.valid) return stats;  // nothing to learn: no guess
   collect(cloud, floor, obstacles, world_from_camera, light_origin_camera, *evidence_);
   stats = apply(*evidence_);
+  stats.sweep = sweep_->sweep();
+  if (config_.sweep.record_passes) stats.passes = sweep_->takePasses();
   if (++frames_ % static_cast<std::size_t>(config_.crop_interval) == 0) {
     crop(world_from_camera.translation().head<2>());
     stats.cropped = true;
@@ -215,41 +121,73 @@ MapUpdateStats OccupancyMap::insertFrame(const pcl::PointCloud<PointRDM>& cloud,
 void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
                            const ObstacleResult& obstacles,
                            const Eigen::Isometry3d& world_from_camera,
-                           const Eigen::Vector3d& light_origin_camera, FrameEvidence& e) const {
+                           const Eigen::Vector3d& light_origin_camera, FrameEvidence& e) {
   const MapFrame map{cloud, obstacles.floor, world_from_camera, *tree_, config_.resolution};
   e.marks.clear();
-  // Hits: the obstacles' points.
+  e.sweep_points.clear();
+  e.sweep_keys.clear();
+  const auto evidence = [&](const Eigen::Vector3d& m, bool above, bool strong, bool tall) {
+    const octomap::OcTreeKey key = map.keyOf(m);
+    e.sweep_points.push_back(
+        SweepPoint{key[0], key[1], static_cast<float>(m.z()), above, strong, tall});
+    e.sweep_keys.push_back(key);
+  };
+  // Evidence: the obstacles' points, the points of groups rejected as noise (weak).
+  const SweepEvidenceConfig& sweep = config_.sweep;
   for (const Obstacle& o : obstacles.obstacles)
     for (const auto i : o.indices) {
-      if (!hasXYZ(cloud[static_cast<std::size_t>(i)])) continue;
-      const Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
-      if (m.z() <= config_.max_height) e.mark(map.keyOf(m), FrameEvidence::kHit);
+      const auto idx = static_cast<std::size_t>(i);
+      if (!hasXYZ(cloud[idx])) continue;
+      const Eigen::Vector3d m = map.pointAt(idx);
+      const bool above = planeResidual(cloud[idx], floor.plane) > 0;
+      if (m.z() <= config_.max_height)
+        evidence(m, above, true, above && m.z() >= sweep.tall_height);
     }
-  // Weak points: groups rejected as noise, and floor points high above the plane.
   for (const auto i : obstacles.rejected) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    if (!hasXYZ(p) || planeResidual(p, floor.plane) <= 0) continue;
-    const Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
-    if (m.z() <= config_.max_height) e.mark(map.keyOf(m), FrameEvidence::kWeak);
+    const auto idx = static_cast<std::size_t>(i);
+    if (!hasXYZ(cloud[idx])) continue;
+    const Eigen::Vector3d m = map.pointAt(idx);
+    if (m.z() <= config_.max_height)
+      evidence(m, planeResidual(cloud[idx], floor.plane) > 0, false, false);
   }
   e.measureSlits(cloud, floor, config_);
   e.flagWeakFloorPoints(cloud, floor, config_);
-  // Floor points: floor (or weak) marks, and the free cells of the light ray that reached them.
+  // Floor points: weak evidence, or floor marks and the free cells of the light ray that reached
+  // them; and how far the slits moved across the floor since the last frame.
   const Eigen::Vector3d light = map.toMap(light_origin_camera);
   octomap::OcTreeKey last_ray;  // floor voxel of the last ray: the points of a slit come in order
   int last_slit = -1;
+  slit_sweep_->begin(cloud.size());
   for (const auto i : floor.inliers) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    const auto idx = static_cast<std::size_t>(i);
+    const PointRDM& p = cloud[idx];
     if (!hasXYZ(p)) continue;
-    Eigen::Vector3d m = map.pointAt(static_cast<std::size_t>(i));
+    Eigen::Vector3d m = map.pointAt(idx);
     m.z() = 0.0;  // on the floor: its height is noise
+    slit_sweep_->add(idx, p.slit, m.head<2>());
+    if (e.weak_point[idx] != 0) {
+      evidence(m, e.weak_point[idx] > 0, false, false);
+      continue;
+    }
     const octomap::OcTreeKey key = map.keyOf(m);
-    const bool is_weak = e.weak_point[static_cast<std::size_t>(i)] != 0;
-    e.mark(key, is_weak ? FrameEvidence::kWeak : FrameEvidence::kFloor);
-    if (is_weak || (key == last_ray && p.slit == last_slit)) continue;
+    e.mark(key, FrameEvidence::kFloor);
+    if (key == last_ray && p.slit == last_slit) continue;
     addFreeRay(m, light, key, e);  // one ray per slit and floor voxel
     last_ray = key;
     last_slit = p.slit;
+  }
+  // The evidence judged over the sweep: only what is consistent as the slits sweep it is marked.
+  sweep_->beginFrame(slit_sweep_->finish());
+  sweep_->addEvidence(e.sweep_points);
+  for (std::size_t j = 0; j < e.sweep_points.size(); ++j) {
+    const SweepPoint& p = e.sweep_points[j];
+    const SweepVerdict v = sweep_->verdictAt(p.x, p.y);
+    if (v == SweepVerdict::Above && p.above)
+      e.mark(e.sweep_keys[j], p.strong ? FrameEvidence::kHit : FrameEvidence::kWeak);
+    else if (v == SweepVerdict::Below && !p.above && p.strong)
+      e.mark(e.sweep_keys[j], FrameEvidence::kHit);  // a hole: its floor-layer voxel
+    else
+      e.mark(e.sweep_keys[j], FrameEvidence::kPending);
   }
 }
 
@@ -273,14 +211,18 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
   for (std::size_t i = 0; i < e.marks.size();) {
     // The marks of one voxel: a hit wins, then enough weak points; a miss only without weak
     // points (an object split between voxels lifts a few points in each).
-    const std::uint64_t voxel = e.marks[i] >> 2;
+    constexpr int kBits = FrameEvidence::kKindBits;
+    constexpr std::uint64_t kKind = (1u << kBits) - 1;
+    const std::uint64_t voxel = e.marks[i] >> kBits;
     int weak = 0;
-    bool hit = false;
-    for (; i < e.marks.size() && e.marks[i] >> 2 == voxel; ++i) {
-      weak += (e.marks[i] & 3) == FrameEvidence::kWeak;
-      hit = hit || (e.marks[i] & 3) == FrameEvidence::kHit;
+    bool hit = false, pending = false;
+    for (; i < e.marks.size() && e.marks[i] >> kBits == voxel; ++i) {
+      const std::uint64_t kind = e.marks[i] & kKind;
+      weak += kind == FrameEvidence::kWeak;
+      hit = hit || kind == FrameEvidence::kHit;
+      pending = pending || kind == FrameEvidence::kPending;
     }
-    const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << 2);
+    const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << kBits);
     if (hit) {
       e.saturated_free.erase(voxel);
       tree_->updateNode(key, log_hit_, true);
@@ -289,13 +231,15 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
       e.saturated_free.erase(voxel);
       tree_->updateNode(key, log_weak_, true);
       ++stats.weak_voxels;
-    } else if (weak == 0) {
+    } else if (weak == 0 && !pending) {
       ++stats.free_voxels;
       if (e.saturated_free.count(voxel)) continue;  // as octomap: no change at the bound
       const octomap::OcTreeNode* node = tree_->updateNode(key, log_miss_, true);
       if (node && node->getLogOdds() <= tree_->getClampingThresMinLog())
         e.saturated_free.insert(voxel);
-    }  // too few weak points: no evidence either way this frame
+    } else {  // evidence not consistent over the sweep, or too few weak points: unknown
+      ++stats.pending_voxels;
+    }
   }
   return stats;
 }
@@ -373,6 +317,10 @@ void OccupancyMap::crop(const Eigen::Vector2d& robot_xy) {
   kept->prune();
   tree_ = std::move(kept);
   evidence_->saturated_free.clear();
+  const octomap::OcTreeKey centre = tree_->coordToKey(
+      octomap::point3d(static_cast<float>(robot_xy.x()), static_cast<float>(robot_xy.y()), 0.0f));
+  sweep_->crop(centre[0], centre[1],
+               static_cast<std::int32_t>(std::ceil(config_.window_half_size / config_.resolution)));
 }
 
 void OccupancyMap::save(const std::string& path) const {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace multislit {
 
@@ -45,6 +46,9 @@ void WalkerConfig::validate() const {
   require(stop_frames >= 1, "stop_frames", "must be >= 1");
   require(near_distance >= 0, "near_distance", "must be >= 0 m");
   require(known_margin >= 0, "known_margin", "must be >= 0 m");
+  require(std::isfinite(sudden_min_height) && sudden_min_height >= 0 && sudden_min_height <= 1,
+          "sudden_min_height", "must be in [0, 1] m");
+  require(sudden_frames >= 1 && sudden_frames <= 1000, "sudden_frames", "must be in [1, 1000]");
   require(max_turn > 0 && max_turn <= 180, "max_turn", "must be in (0, 180] deg");
 }
 
@@ -54,27 +58,39 @@ Walker::Walker(const WalkerConfig& config, const FootConfig& foot) : config_(con
 }
 
 std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
-                                           const Pose2D& body) const {
+                                           const Pose2D& body) {
   const double corridor = 0.5 * foot_.foot_separation + 0.5 * foot_.foot_width + config_.margin;
+  const double m = config_.known_margin;
+  std::vector<Candidate> seen;
+  std::optional<Obstacle> sudden;
   for (const Obstacle& o : obstacles.obstacles) {  // nearest first
     if (!(o.distance <= config_.near_distance)) break;
     if (o.max.y() < -corridor || o.min.y() > corridor || o.max.x() < 0) continue;
-    // Unknown to the map: no occupied voxel around its bounding box before this frame.
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
-    Eigen::Vector2d hi = -lo;
+    if (!(o.height >= config_.sudden_min_height)) continue;  // a texture lobe reaches less
+    // Its box on the floor, in the world.
+    Candidate c{Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()),
+                Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity()), 1};
     for (const double x : {o.min.x(), o.max.x()})
       for (const double y : {o.min.y(), o.max.y()}) {
         const Eigen::Vector2d w = body.toWorld(Eigen::Vector2d(x, y));
-        lo = lo.cwiseMin(w);
-        hi = hi.cwiseMax(w);
+        c.lo = c.lo.cwiseMin(w);
+        c.hi = c.hi.cwiseMax(w);
       }
-    const double m = config_.known_margin;
-    if (map.occupiedInBox(Eigen::Vector3d(lo.x() - m, lo.y() - m, -1.0),
-                          Eigen::Vector3d(hi.x() + m, hi.y() + m, 1.0))
-            .empty())
-      return o;
+    // Unknown to the map: no occupied voxel around its box before this frame.
+    if (!map.occupiedInBox(Eigen::Vector3d(c.lo.x() - m, c.lo.y() - m, -1.0),
+                           Eigen::Vector3d(c.hi.x() + m, c.hi.y() + m, 1.0))
+             .empty())
+      continue;
+    // Seen in the frames before: a candidate of the last frame overlaps it.
+    for (const Candidate& before : candidates_)
+      if ((c.lo.array() <= before.hi.array() + m).all() &&
+          (before.lo.array() <= c.hi.array() + m).all())
+        c.frames = std::max(c.frames, before.frames + 1);
+    if (!sudden && c.frames >= config_.sudden_frames) sudden = o;
+    seen.push_back(c);
   }
-  return std::nullopt;
+  candidates_ = std::move(seen);
+  return sudden;
 }
 
 WalkerResult Walker::step(const OccupancyMap& map, const Pose2D& body, Foot next_foot,

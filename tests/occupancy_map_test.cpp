@@ -211,7 +211,11 @@ TEST(OccupancyMap, FootprintQueryFindsTheCellsUnderASole) {
   const auto cloud = synth.synthesize(scene, robot_from_camera, 3);
   const FloorResult floor = FloorDetector().detect(cloud);
   const ObstacleResult obstacles = ObstacleClusterer().cluster(cloud, floor, robot_from_camera);
-  OccupancyMap map;
+  // One frame is never enough over the sweep (evidence waits for consistent frames): taken as
+  // truth here, where the footprint query is tested.
+  OccupancyMapConfig one_frame;
+  one_frame.sweep.tall_frames = 1;
+  OccupancyMap map(one_frame);
   map.insertFrame(*cloud, floor, obstacles, robot_from_camera,
                   synth.simulator().geometry().projectorCentre());
   Footprint sole;

@@ -230,9 +230,19 @@ TEST(Walker, StopsForASuddenObstacleThenWalks) {
   ball.min = Eigen::Vector3d(0.09, 0.0, 0.0);
   ball.max = Eigen::Vector3d(0.13, 0.04, 0.04);
   ball.distance = 0.09 - foot.toe();
+  ball.height = 0.04;
   seen.obstacles.push_back(ball);
+  // Seen in one frame only: a floor's texture lobe lasts one or two.
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   const std::optional<Obstacle> sudden = walker.findSudden(seen, map, Pose2D{});
   ASSERT_TRUE(sudden);
+  // No higher than a texture lobe reaches: never sudden, however long it is seen.
+  seen.obstacles[0].height = config.sudden_min_height - 0.001;
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  seen.obstacles[0] = ball;
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));  // the run starts again
+  ASSERT_TRUE(walker.findSudden(seen, map, Pose2D{}));
   // Beside the path (not in front of the soles) or far: not sudden.
   seen.obstacles[0].min.y() = 0.12;
   seen.obstacles[0].max.y() = 0.16;

@@ -8,6 +8,7 @@
 #include "multislit/floor_detector.h"
 #include "multislit/obstacles.h"
 #include "multislit/point_types.h"
+#include "multislit/sweep_evidence.h"
 
 #include <octomap/OcTree.h>
 #include <pcl/point_cloud.h>
@@ -22,28 +23,33 @@
 
 namespace multislit {
 
+namespace detail {
+struct FrameEvidence;
+class SlitSweep;
+}  // namespace detail
+
 /// The map frame: world x, y (the robot's odometry) and z = height above the floor measured in
 /// the frame (the metric floor plane), so the floor is at z = 0 whatever the sensor's sway.
 ///
 /// Evidence of one frame, per voxel (each voxel is updated at most once per frame):
-/// - hit: the voxel holds points of an obstacle (ObstacleResult::obstacles);
-/// - weak hit: the floor-layer voxel (0 <= z < resolution) holds at least min_weak_points points
-///   whose residual above the RDMap plane is at least weak_sigmas times their slit's measured
-///   floor noise in this frame, while below the frame's obstacle threshold
-///   (FloorResult::threshold), and that lie at least weak_end_margin points from their slit's ends;
-///   the points of groups rejected as noise count as weak points too;
-/// - miss: the floor-layer voxel holds only floor points and no weak point, or a cell above the
-///   floor layer lies on the light ray of a floor point below free_height (the projector lit the
-///   floor through it); a voxel with fewer weak points than min_weak_points is not updated.
-/// A 3 mm screw gives 0.4 to 0.8 px, below the 0.9 px threshold of every frame, but several times
-/// the 0.12 px noise of the extractor: each pass of a slit over it is a weak hit, and a few passes
-/// make it occupied. Noise makes weak points in one voxel rarely, and never several frames in a
-/// row, while the floor around is seen free in every frame. Weak points count only in runs of
-/// min_weak_run consecutive points along their slit: in real images the noise of adjacent rows is
-/// correlated (lens blur, speckle grain), so noise lifts single rows or pairs, while the screw
-/// lifts the 4 or 5 rows that cross it. (On rendered images of a bare floor, 500 frames of walking
-/// gave 160 weak voxel updates without the run rule and none of them made a voxel occupied; the
-/// run rule removes nearly all of them.)
+/// - evidence points: the points of obstacle groups (strong), and weak points: points of groups
+///   rejected as noise, and floor points whose residual is at least weak_sigmas times their
+///   slit's floor noise (in runs of min_weak_run points of one sign, away from the slit's ends);
+/// - the evidence is judged over the sweep of the slits (SweepEvidence, config `sweep`): where it
+///   is consistent, a voxel holding strong points above the floor is a hit, one holding
+///   min_weak_points weak points a weak hit, and a floor-layer voxel under strong points below the
+///   floor a hit (a hole); where it is not yet consistent (a texture lobe, an object seen once),
+///   the voxel is not updated: unknown;
+/// - miss: the floor-layer voxel holds only floor points, or a cell above the floor layer lies on
+///   the light ray of a floor point below free_height (the projector lit the floor through it).
+///
+/// In frames, with the defaults and the paper's gait (1.7 mm of sweep a frame): a place is occupied
+/// when two slits one after the other each gave it 3 consecutive frames of one sign over 3 mm of
+/// sweep (an object on the floor: a 7 mm cable is occupied about 30 frames after the slits first
+/// reach it), or 2 consecutive moving frames of points higher than 25 mm (a ball), or 6 passes of
+/// weak evidence above the floor (a screw); a hit saturates the voxel (prob_hit 0.85: +1.73 in
+/// log-odds against a threshold of +1.10), and 48 frames of clear floor free it again (prob_miss
+/// -0.05 each, from clamp_max 0.97 down to the threshold).
 ///
 /// Free space is discretized: one light ray per slit and floor voxel, cast from the floor up to
 /// free_height only (not to the sensor), which is where an object on the floor can be. Cells the
@@ -68,6 +74,7 @@ struct OccupancyMapConfig {
   double max_height = 0.3;        ///< points higher are not mapped; window top [m]
   double window_half_size = 1.0;  ///< voxels farther along x or y from the robot are dropped [m]
   int crop_interval = 90;         ///< frames between two crops of the window (3 s) [-]
+  SweepEvidenceConfig sweep;      ///< when evidence is consistent over the sweep
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -81,11 +88,14 @@ struct MapCell {
 
 /// What one frame changed.
 struct MapUpdateStats {
-  bool inserted = false;        ///< false: no floor or no metric scale, nothing was learnt
-  std::size_t hit_voxels = 0;   ///< voxels updated as hit [-]
-  std::size_t weak_voxels = 0;  ///< voxels updated as weak hit [-]
-  std::size_t free_voxels = 0;  ///< voxels updated as miss [-]
-  bool cropped = false;         ///< the window was applied after this frame
+  bool inserted = false;           ///< false: no floor or no metric scale, nothing was learnt
+  std::size_t hit_voxels = 0;      ///< voxels updated as hit [-]
+  std::size_t weak_voxels = 0;     ///< voxels updated as weak hit [-]
+  std::size_t free_voxels = 0;     ///< voxels updated as miss [-]
+  std::size_t pending_voxels = 0;  ///< voxels with evidence not consistent over the sweep [-]
+  double sweep = 0.0;  ///< the slits' travel across themselves so far (SweepEvidence) [m]
+  std::vector<SweepPass> passes;  ///< passes ended (OccupancyMapConfig::sweep.record_passes)
+  bool cropped = false;           ///< the window was applied after this frame
 };
 
 class OccupancyMap {
@@ -114,6 +124,7 @@ class OccupancyMap {
   std::size_t occupiedCount() const;
   std::size_t leafCount() const { return tree_->getNumLeafNodes(); }
   std::size_t memoryUsage() const { return tree_->memoryUsage(); }  ///< [bytes]
+  const SweepEvidence& sweepEvidence() const { return *sweep_; }
 
   /// Drops the voxels outside the window around `robot_xy` and prunes the tree.
   void crop(const Eigen::Vector2d& robot_xy);
@@ -122,18 +133,20 @@ class OccupancyMap {
   void save(const std::string& path) const;
 
  private:
-  struct FrameEvidence;
+  using FrameEvidence = detail::FrameEvidence;
   std::unique_ptr<octomap::OcTree> makeTree() const;
   void collect(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
                const ObstacleResult& obstacles, const Eigen::Isometry3d& world_from_camera,
-               const Eigen::Vector3d& light_origin_camera, FrameEvidence& evidence) const;
+               const Eigen::Vector3d& light_origin_camera, FrameEvidence& evidence);
   void addFreeRay(const Eigen::Vector3d& floor_point, const Eigen::Vector3d& light,
                   const octomap::OcTreeKey& floor_key, FrameEvidence& evidence) const;
   MapUpdateStats apply(FrameEvidence& evidence);
 
   OccupancyMapConfig config_;
   std::unique_ptr<octomap::OcTree> tree_;
-  std::unique_ptr<FrameEvidence> evidence_;  ///< one frame's, kept to reuse its memory
+  std::unique_ptr<FrameEvidence> evidence_;        ///< one frame's, kept to reuse its memory
+  std::unique_ptr<detail::SlitSweep> slit_sweep_;  ///< the slits' move between frames
+  std::unique_ptr<SweepEvidence> sweep_;           ///< evidence over the sweep
   float log_hit_ = 0, log_weak_ = 0, log_miss_ = 0;
   std::size_t frames_ = 0;
 };

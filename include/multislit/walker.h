@@ -7,6 +7,8 @@
 #include "multislit/obstacles.h"
 #include "multislit/occupancy_map.h"
 
+#include <Eigen/Core>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -35,8 +37,14 @@ struct WalkerConfig {
   /// An obstacle is known (not sudden) when the map held occupied voxels this close to it before
   /// the frame.
   double known_margin = 0.03;  ///< [m]
-  double max_turn = 180.0;     ///< widest turn considered when choosing a side [deg]
-  bool prefer_left = true;     ///< side taken when both are as good (the paper turned left)
+  /// Only an obstacle this high above the floor stops the robot: higher than the lobes a floor's
+  /// texture makes in one frame (docs/walk.md).
+  double sudden_min_height = 0.025;  ///< [m]
+  /// ... seen in this many consecutive frames (a lobe lasts one or two), in places that overlap
+  /// within known_margin.
+  int sudden_frames = 2;    ///< [-]
+  double max_turn = 180.0;  ///< widest turn considered when choosing a side [deg]
+  bool prefer_left = true;  ///< side taken when both are as good (the paper turned left)
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -73,9 +81,11 @@ class Walker {
   const WalkerConfig& config() const { return config_; }
 
   /// The nearest obstacle of this frame that appeared suddenly very near the feet of the body at
-  /// `body`: near, in front of the soles, and unknown to the map before it learns this frame.
+  /// `body`: near, in front of the soles, above the floor by sudden_min_height, unknown to the map
+  /// before it learns this frame, and seen so in sudden_frames consecutive frames (call once a
+  /// frame: it remembers the frame's candidates).
   std::optional<Obstacle> findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
-                                     const Pose2D& body) const;
+                                     const Pose2D& body);
 
   /// The command for the body at `body`, whose `next_foot` swings next, given the map (which has
   /// learnt this frame) and what the frame showed.
@@ -87,8 +97,16 @@ class Walker {
                            std::vector<Footstep>* planned = nullptr) const;
   int chooseTurn(const OccupancyMap& map, const Pose2D& body, Foot next_foot) const;
 
+  /// A candidate sudden obstacle of the last frame: its box on the floor (world) and the frames in
+  /// a row it was seen.
+  struct Candidate {
+    Eigen::Vector2d lo, hi;
+    int frames = 0;
+  };
+
   WalkerConfig config_;
   FootConfig foot_;
+  std::vector<Candidate> candidates_;
   int stop_left_ = 0;  ///< frames of the current stop still to come
   int turning_ = 0;    ///< side of the turn under way, 0 when not turning
 };

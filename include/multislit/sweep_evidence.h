@@ -1,0 +1,117 @@
+// Evidence judged over the sweep of the slits, not frame by frame. As the robot walks, each slit
+// sweeps across the floor. Where a stripe crosses a dark line (grout, a board gap, carpet fibres),
+// the line darkens one side of the stripe and then the other: a short lobe below the floor and one
+// above, each lasting about a stripe width of travel. An object on the floor lifts every frame of
+// the slit's crossing, on one side only, and again on the next slit. So a place (a column of map
+// voxels) counts as occupied only when its evidence is one-signed over more travel than a lobe, in
+// several frames; as a hole when the same holds below the floor. Evidence from a view that has not
+// moved (standing, turning in place) adds nothing new, except for an object taller than any lobe.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace multislit {
+
+/// The rule, in travel of the slits across themselves (the sweep) and frames. With the paper's
+/// gait (50 mm/s at 30 Hz) one frame is 1.7 mm of sweep.
+struct SweepEvidenceConfig {
+  /// A frame is new evidence at a place only when the slits moved this far across it since the
+  /// place's last counted frame: standing or turning in place repeats the same view.
+  double min_step = 0.0005;  ///< [m]
+  /// Frame-to-frame moves of the slits smaller than this are taken as no move (noise) [m].
+  double dead_zone = 0.0002;  ///< [m]
+  /// A pass of a slit over a place ends when the slits moved this far with no evidence there.
+  double pass_gap = 0.006;  ///< [m]
+  /// Consecutive frames of one sign in a pass that occupy a place (noise comes and goes) [-]
+  int min_frames = 3;
+  /// Sweep between the first and last of them: more than a texture lobe lasts.
+  double min_sweep = 0.003;  ///< [m]
+  /// One-signed: frames with evidence of the other sign at most this share of them [-].
+  double max_opposite_share = 0.25;
+  /// Higher than texture lobes mostly reach: occupied after tall_frames consecutive frames of a
+  /// moving view (a ball thrown in front of a walking robot), and kept while it is seen so.
+  double tall_height = 0.025;  ///< [m]
+  int tall_frames = 2;         ///< [-]
+  /// Consistent passes in a row, i.e. slits one after the other, that occupy a place [-]
+  int min_passes = 2;
+  /// Passes in a row with only weak evidence (below the obstacle threshold), above the floor and
+  /// never below, that occupy a place (a screw a few mm high) [-]
+  int weak_passes = 6;
+  /// Evidence the slits have left this far behind is forgotten (memory stays flat).
+  double forget_sweep = 0.15;  ///< [m]
+  int neighbourhood = 0;       ///< places are judged with this many cells around them [cells]
+  bool record_passes = false;  ///< keep every ended pass for takePasses() (measurement)
+
+  void validate() const;  ///< throws std::invalid_argument naming the field
+};
+
+/// One point of evidence of one frame: the map column it falls in and its side of the floor.
+struct SweepPoint {
+  std::int32_t x = 0, y = 0;  ///< the column: floor cell indices [cells]
+  float height = 0.0f;        ///< above the floor (< 0: below) [m]
+  bool above = true;          ///< above the floor (the residual's sign)
+  bool strong = true;         ///< in an obstacle group (false: weak evidence)
+  /// Of an obstacle group, and higher than texture lobes mostly reach
+  /// (SweepEvidenceConfig::tall_height): a ball, a box.
+  bool tall = false;
+};
+
+/// What the sweep says of a column this frame.
+enum class SweepVerdict : std::uint8_t {
+  Pending,  ///< evidence not (yet) consistent: the place stays unknown
+  Above,    ///< an object: one-signed above over the sweep, or taller than any lobe
+  Below     ///< a hole or a step down: one-signed below over the sweep
+};
+
+/// One pass of the slits over a place, as measured (SweepEvidenceConfig::record_passes).
+struct SweepPass {
+  std::int32_t x = 0, y = 0;  ///< the column [cells]
+  int above_frames = 0;       ///< counted frames with evidence above the floor [-]
+  int below_frames = 0;       ///< and below [-]
+  int above_run = 0;          ///< the longest run of consecutive frames above [-]
+  int below_run = 0;          ///< and below [-]
+  double above_sweep = 0.0;   ///< sweep covered by the longest run above [m]
+  double below_sweep = 0.0;   ///< and below [m]
+  double max_height = 0.0;    ///< highest strong point above the floor [m]
+  bool strong = false;        ///< held points of obstacle groups
+  SweepVerdict verdict = SweepVerdict::Pending;  ///< what the place was judged at its end
+};
+
+/// The evidence of every place over the sweep. Not thread-safe.
+class SweepEvidence {
+ public:
+  explicit SweepEvidence(const SweepEvidenceConfig& config = {});  ///< validates
+  SweepEvidence(SweepEvidence&&) noexcept;
+  SweepEvidence& operator=(SweepEvidence&&) noexcept;
+  ~SweepEvidence();
+
+  const SweepEvidenceConfig& config() const { return config_; }
+
+  /// Starts a frame whose slits moved `step` across themselves since the previous frame [m].
+  void beginFrame(double step);
+  /// Judges the frame's evidence; the verdict of each point's column is then verdictAt().
+  void addEvidence(const std::vector<SweepPoint>& points);
+  SweepVerdict verdictAt(std::int32_t x, std::int32_t y) const;
+
+  double sweep() const { return sweep_; }  ///< the slits' travel so far [m]
+  std::size_t places() const;              ///< places holding evidence [-]
+  /// Forgets the places farther than `half_size` cells from (x, y) along either axis.
+  void crop(std::int32_t x, std::int32_t y, std::int32_t half_size);
+  std::vector<SweepPass> takePasses();  ///< the passes ended since the last call
+
+ public:
+  struct State;  ///< (private to the implementation)
+
+ private:
+  bool onWeakLine(std::uint64_t key) const;
+
+  SweepEvidenceConfig config_;
+  std::unique_ptr<State> state_;
+  double sweep_ = 0.0;
+  std::uint64_t frame_ = 0;
+};
+
+}  // namespace multislit

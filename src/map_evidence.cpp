@@ -1,0 +1,134 @@
+#include "map_evidence.h"
+
+#include "multislit/plane_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace multislit::detail {
+
+void FrameEvidence::mark(const octomap::OcTreeKey& key, Kind kind) {
+  const std::uint64_t m =
+      (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
+          << kKindBits |
+      kind;
+  // The points of a slit come in order, several per voxel: a repeat of the last mark adds
+  // nothing (except for weak points, which are counted), and leaves less to sort.
+  if (kind != kWeak && !marks.empty() && marks.back() == m) return;
+  marks.push_back(m);
+}
+
+octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
+  const std::uint64_t k = mark >> kKindBits;
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(k),
+                            static_cast<octomap::key_type>(k >> 16),
+                            static_cast<octomap::key_type>(k >> 32));
+}
+
+void FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                                 const OccupancyMapConfig& config) {
+  const std::size_t rows = cloud.height, width = cloud.width;
+  slits.assign(rows, Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
+  residual.resize(cloud.size());
+  for (const auto i : floor.inliers) {
+    const auto idx = static_cast<std::size_t>(i);
+    Slit& slit = slits[idx / width];
+    const auto col = static_cast<std::uint32_t>(idx % width);
+    const double r = planeResidual(cloud[idx], floor.plane);
+    residual[idx] = r;
+    slit.sum_sq += r * r;
+    ++slit.count;
+    slit.first = std::min(slit.first, col);
+    slit.last = std::max(slit.last, col);
+  }
+  for (Slit& slit : slits) {
+    const double sigma = slit.count > 1 ? std::sqrt(slit.sum_sq / static_cast<double>(slit.count))
+                                        : floor.residual_std;
+    slit.weak = config.weak_sigmas * std::max(sigma, config.min_sigma);
+  }
+}
+
+void FrameEvidence::flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud,
+                                        const FloorResult& floor,
+                                        const OccupancyMapConfig& config) {
+  const std::size_t rows = cloud.height, width = cloud.width;
+  const auto end = static_cast<std::uint32_t>(config.weak_end_margin);
+  weak_point.assign(cloud.size(), 0);
+  for (const auto i : floor.inliers) {
+    const auto idx = static_cast<std::size_t>(i);
+    const Slit& slit = slits[idx / width];
+    const auto col = static_cast<std::uint32_t>(idx % width);
+    if (col < slit.first + end || col + end > slit.last) continue;
+    weak_point[idx] = residual[idx] >= slit.weak ? 1 : residual[idx] <= -slit.weak ? -1 : 0;
+  }
+  // Runs of one sign only.
+  const auto run = static_cast<std::size_t>(config.min_weak_run);
+  for (std::size_t row = 0; row < rows; ++row) {
+    std::int8_t* flags = weak_point.data() + row * width;
+    for (std::size_t col = 0; col < width;) {
+      if (!flags[col]) {
+        ++col;
+        continue;
+      }
+      std::size_t stop = col;
+      while (stop < width && flags[stop] == flags[col]) ++stop;
+      if (stop - col < run) std::fill(flags + col, flags + stop, std::int8_t{0});
+      col = stop;
+    }
+  }
+}
+
+void SlitSweep::begin(std::size_t size) {
+  if (seen_.size() != size) seen_.assign(size, Seen{});
+  ++frame_;
+  first_slit_ = last_slit_ = 0;
+  first_count_ = last_count_ = 0;
+  now_.clear();
+  now_xy_.clear();
+}
+
+void SlitSweep::add(std::size_t index, int slit, const Eigen::Vector2d& world) {
+  if (now_.empty() || slit < first_slit_) {
+    first_slit_ = slit;
+    first_sum_.setZero();
+    first_count_ = 0;
+  }
+  if (now_.empty() || slit > last_slit_) {
+    last_slit_ = slit;
+    last_sum_.setZero();
+    last_count_ = 0;
+  }
+  if (slit == first_slit_) {
+    first_sum_ += world;
+    ++first_count_;
+  }
+  if (slit == last_slit_) {
+    last_sum_ += world;
+    ++last_count_;
+  }
+  now_.push_back(static_cast<std::uint32_t>(index));
+  now_xy_.push_back(world.cast<float>());
+}
+
+double SlitSweep::finish() {
+  moves_.clear();
+  Eigen::Vector2d across = Eigen::Vector2d::Zero();
+  if (first_count_ > 0 && last_count_ > 0 && last_slit_ > first_slit_)
+    across = last_sum_ / static_cast<double>(last_count_) -
+             first_sum_ / static_cast<double>(first_count_);
+  const bool has_across = across.norm() > 1e-3;
+  if (has_across) across.normalize();
+  const Eigen::Vector2f n = across.cast<float>();
+  for (std::size_t j = 0; j < now_.size(); ++j) {
+    Seen& s = seen_[now_[j]];
+    if (has_across && s.frame + 1 == frame_)
+      moves_.push_back((now_xy_[j] - Eigen::Vector2f(s.x, s.y)).dot(n));
+    s = Seen{now_xy_[j].x(), now_xy_[j].y(), frame_};
+  }
+  if (moves_.size() < 20) return 0.0;
+  const auto mid = moves_.begin() + static_cast<std::ptrdiff_t>(moves_.size() / 2);
+  std::nth_element(moves_.begin(), mid, moves_.end());
+  return static_cast<double>(*mid);
+}
+
+}  // namespace multislit::detail

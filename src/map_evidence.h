@@ -1,0 +1,92 @@
+// One frame's evidence for the occupancy map (private to the library): a mark per point and per
+// cell of a light ray, the floor noise of each slit, the weak points, and how far the slits moved
+// across the floor since the previous frame.
+#pragma once
+
+#include "multislit/floor_detector.h"
+#include "multislit/occupancy_map.h"
+#include "multislit/point_types.h"
+#include "multislit/sweep_evidence.h"
+
+#include <octomap/OcTree.h>
+#include <pcl/point_cloud.h>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_set>
+#include <vector>
+
+namespace multislit::detail {
+
+/// Marks as (packed key << 3 | kind), so that sorting gathers the marks of each voxel.
+struct FrameEvidence {
+  enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kPending = 2, kWeak = 3, kHit = 4 };
+  static constexpr int kKindBits = 3;
+  std::vector<std::uint64_t> marks;
+  octomap::KeyRay ray;  ///< (allocates room for 100 000 keys: made once)
+  /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
+  struct Slit {
+    double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
+    std::size_t count = 0;    ///< its floor points
+    std::uint32_t first = 0;  ///< first column with a floor point
+    std::uint32_t last = 0;   ///< last column with a floor point
+    double weak = 0.0;        ///< residual from which a point is weak [px]
+  };
+  std::vector<Slit> slits;
+  std::vector<double> residual;         ///< per cloud point (floor inliers only) [px]
+  std::vector<std::int8_t> weak_point;  ///< per cloud point: +1 weak above, -1 below, 0 not weak
+  /// Voxels whose leaf is at the lower clamping bound: a miss cannot change them (octomap's
+  /// updateNode() would search the tree to find that out), so it is skipped. Kept across frames;
+  /// emptied when the tree is rebuilt by crop().
+  std::unordered_set<std::uint64_t> saturated_free;
+  /// This frame's points of evidence for the sweep, and the voxel each one marks.
+  std::vector<SweepPoint> sweep_points;
+  std::vector<octomap::OcTreeKey> sweep_keys;
+
+  void mark(const octomap::OcTreeKey& key, Kind kind);
+  static octomap::OcTreeKey keyOf(std::uint64_t mark);
+
+  /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
+  /// mean), and where each slit's measured points end (a profile cut by the slit's end is biased):
+  /// `slits` and, per floor inlier, `residual`.
+  void measureSlits(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                    const OccupancyMapConfig& config);
+  /// `weak_point`: the floor inliers far above (or below) the plane for their slit and away from
+  /// its ends, in runs of min_weak_run consecutive points of one sign along the slit: an object
+  /// lifts every row that crosses it, while noise lifts one row or a pair. After measureSlits().
+  void flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
+                           const OccupancyMapConfig& config);
+};
+
+/// How far the slits moved across themselves on the floor since the previous frame: the median,
+/// over the points seen in both frames, of their move along the direction from the first slit to
+/// the last. A point of the RDMap is one reference point, so the same index is the same slit
+/// point. Walking moves the slits across; standing does not; turning in place moves them mostly
+/// along themselves.
+class SlitSweep {
+ public:
+  /// Starts a frame of `size` points.
+  void begin(std::size_t size);
+  /// A floor point of the frame: its index, slit and world x, y [m].
+  void add(std::size_t index, int slit, const Eigen::Vector2d& world);
+  /// The move since the previous frame [m] (0 without one); this frame becomes the previous.
+  double finish();
+
+ private:
+  struct Seen {
+    float x = 0.0f, y = 0.0f;
+    std::uint32_t frame = 0;  ///< the frame it was seen in (0: never)
+  };
+  std::vector<Seen> seen_;
+  std::uint32_t frame_ = 0;
+  int first_slit_ = 0, last_slit_ = 0;
+  Eigen::Vector2d first_sum_ = Eigen::Vector2d::Zero(), last_sum_ = Eigen::Vector2d::Zero();
+  std::size_t first_count_ = 0, last_count_ = 0;
+  std::vector<std::uint32_t> now_;  ///< indices seen this frame
+  std::vector<Eigen::Vector2f> now_xy_;
+  std::vector<float> moves_;
+};
+
+}  // namespace multislit::detail
