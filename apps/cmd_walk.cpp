@@ -10,6 +10,7 @@
 #include "recording.h"
 #include "walk_csv.h"
 #include "walk_figures.h"
+#include "walk_sweep.h"
 
 #include "multislit/sim/walk.h"
 
@@ -44,6 +45,9 @@ void declareWalkOptions(cli::ArgParser& args) {
   args.option("record", "",
               "DIR: also write the walk as a recording (frames, odometry.csv, calibration.yaml) "
               "that multislit map --sequence DIR replays");
+  args.flag("measure-sweep",
+            "walk straight whatever the map holds and write each pass of the slits over a place "
+            "with evidence to sweep_passes.csv (docs/walk.md)");
   args.flag("no-ball", "no ball is thrown in");
   args.flag("no-cable", "no LAN cable on the floor");
   args.flag("synthesize",
@@ -83,6 +87,7 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
       throw std::invalid_argument("--photometry needs rendered images, not --synthesize");
     if (args.has("photometry"))
       applyPhotometry(choosePhotometry(args.str("photometry"), c.render_config.seed), c);
+    if (args.has("measure-sweep")) measureSweep(c);
     c.validate();
   } catch (const std::invalid_argument& e) {
     throw cli::UsageError(e.what());
@@ -114,6 +119,9 @@ struct Recorder {
   int ball_cleared = -1;  ///< first frame the map is free where the ball landed, after it left
   Eigen::Vector2d ball_spot = Eigen::Vector2d::Constant(NAN);
   std::string photometry = "default";  ///< --photometry, as given
+  std::size_t false_voxels = 0;        ///< occupied voxels where no object lies, now
+  std::size_t false_voxels_most = 0;   ///< ... at most
+  int walking = 0;                     ///< frames walking straight
 };
 
 /// Whether the map holds an occupied voxel within 1 cm of the object, seen from above.
@@ -189,6 +197,11 @@ void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
   r.measure_s += f.measure_seconds;
   r.process_s += f.process_seconds;
   r.top.path.push_back(f.body);
+  std::vector<SceneObject> objects;
+  for (const ObjectView& o : f.objects) objects.push_back(o.object);
+  r.false_voxels = falseVoxels(walk.map(), objects);
+  r.false_voxels_most = std::max(r.false_voxels_most, r.false_voxels);
+  r.walking += f.motion == Command::Walk;
   if (f.footstep) {
     r.top.footsteps.push_back(*f.footstep);
     r.top.clearances.push_back(f.footstep_clearance);
@@ -211,8 +224,6 @@ void record(Recorder& r, const WalkFrame& f, const WalkSimulation& walk) {
   if (f.motion != r.motion || k == 0) {
     char head[64];
     std::snprintf(head, sizeof head, "frame %4d (%5.1f s): ", k, k / walk.config().gait.frame_rate);
-    std::vector<SceneObject> objects;
-    for (const ObjectView& o : f.objects) objects.push_back(o.object);
     const WalkConfig& c = walk.config();
     r.events.push_back(head + describeMotion(f, objects, walk.gait().turnDirection(),
                                              c.pipeline.walker.stop_frames / c.gait.frame_rate));
@@ -288,12 +299,14 @@ std::string summary(const Recorder& r, const WalkSimulation& walk, double second
   std::snprintf(s, sizeof s,
                 "footsteps: %zu, touching an object: %d (closest %.1f mm)\n"
                 "path: %.2f m walked, ends at (%.2f, %.2f) m heading %.0f deg\n"
-                "map: %zu occupied voxels of %.0f mm, %zu voxels, %.0f kB (a window of +-%.1f m "
-                "around the robot)\n"
+                "frames walking straight: %d of %d\n"
+                "map: %zu occupied voxels of %.0f mm (%zu where no object lies; %zu at most), %zu "
+                "voxels, %.0f kB (a window of +-%.1f m around the robot)\n"
                 "time: %.0f s in all; per frame %.1f ms %s, %.2f ms floor + obstacles + map + "
                 "walker\n",
                 r.top.footsteps.size(), touched, 1e3 * closest, walked, end.x, end.y,
-                end.yaw / kDeg, walk.map().occupiedCount(), 1e3 * c.pipeline.map.resolution,
+                end.yaw / kDeg, r.walking, frames, walk.map().occupiedCount(),
+                1e3 * c.pipeline.map.resolution, r.false_voxels, r.false_voxels_most,
                 walk.map().leafCount(), walk.map().memoryUsage() / 1e3,
                 c.pipeline.map.window_half_size, seconds, 1e3 * r.measure_s / frames,
                 c.render ? "rendering and extracting" : "synthesizing", 1e3 * r.process_s / frames);
@@ -348,6 +361,11 @@ int runWalk(int argc, char** argv) {
   OutputFile csv(out / "obstacles.csv");  // whole or absent, as every output
   r.csv = &csv.stream();
   writeWalkCsvHeader(*r.csv);
+  std::optional<OutputFile> passes;
+  if (args.has("measure-sweep")) {
+    passes.emplace(out / "sweep_passes.csv");
+    writeSweepPassHeader(passes->stream());
+  }
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
@@ -358,12 +376,14 @@ int runWalk(int argc, char** argv) {
     const WalkFrame f = walk.step();
     if (recording) recording->add(f.image, f.stamp_us, f.world_from_torso);
     record(r, f, walk);
+    if (passes) writeSweepPasses(passes->stream(), f, walk.map());
     trackBall(r, f, walk);
     progress.update(static_cast<std::size_t>(k + 1));
   }
   progress.finish();
   if (recording) recording->finish();
   csv.commit();
+  if (passes) passes->commit();
   writeFigures(r, walk, out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

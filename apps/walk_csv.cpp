@@ -11,7 +11,8 @@ namespace multislit::apps {
 void writeWalkCsvHeader(std::ostream& csv) {
   csv << "frame,time_s,x_m,y_m,yaw_deg,decision,reason,motion,floor_found,valid_points,"
          "floor_std_px,obstacle_points,obstacles,nearest_m,map_occupied,map_voxels,map_bytes,"
-         "ball_lit,ball_detected,cable_lit,cable_detected,footstep,footstep_clearance_m\n";
+         "ball_lit,ball_detected,cable_lit,cable_detected,footstep,footstep_clearance_m,sweep_mm,"
+         "map_pending\n";
 }
 
 void writeWalkCsvLine(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map, double fps) {
@@ -33,9 +34,11 @@ void writeWalkCsvLine(std::ostream& csv, const WalkFrame& f, const OccupancyMap&
       map.leafCount(), map.memoryUsage());
   csv << s << lit[0] << ',' << detected[0] << ',' << lit[1] << ',' << detected[1] << ',';
   if (f.footstep)
-    csv << footName(f.footstep->foot) << ',' << f.footstep_clearance << '\n';
+    csv << footName(f.footstep->foot) << ',' << f.footstep_clearance;
   else
-    csv << ",\n";
+    csv << ',';
+  std::snprintf(s, sizeof s, ",%.2f,%zu\n", 1e3 * f.map.sweep, f.map.pending_voxels);
+  csv << s;
 }
 
 }  // namespace multislit::apps

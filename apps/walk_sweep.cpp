@@ -1,0 +1,77 @@
+#include "walk_sweep.h"
+
+#include "multislit/sim/truth.h"
+
+#include <cmath>
+#include <string>
+
+namespace multislit::apps {
+
+namespace {
+
+/// The object nearest to a cell of `size` at `centre` seen from above, within `reach` [m].
+const SceneObject* objectNear(const std::vector<SceneObject>& objects,
+                              const Eigen::Vector2d& centre, double size, double reach) {
+  Footprint cell;
+  cell.centre = centre;
+  cell.length = cell.width = size;
+  const SceneObject* best = nullptr;
+  double nearest = reach;
+  for (const SceneObject& o : objects) {
+    const double d = clearance(cell, o);
+    if (d <= nearest) {
+      nearest = d;
+      best = &o;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+void measureSweep(WalkConfig& config) {
+  SweepEvidenceConfig& sweep = config.pipeline.map.sweep;
+  sweep.record_passes = true;
+  sweep.tall_frames = sweep.min_passes = sweep.weak_passes = 1000;
+  config.pipeline.walker.sudden_frames = 1000;
+}
+
+void writeSweepPassHeader(std::ostream& csv) {
+  csv << "frame,x,y,above_frames,below_frames,above_run,below_run,above_sweep_mm,below_sweep_mm,"
+         "max_height_mm,strong,verdict,object\n";
+}
+
+void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map) {
+  std::vector<SceneObject> objects;
+  for (const ObjectView& o : f.objects) objects.push_back(o.object);
+  const octomap::OcTree& tree = map.tree();
+  const double res = tree.getResolution();
+  static const char* const kVerdicts[] = {"pending", "above", "below"};
+  for (const SweepPass& p : f.map.passes) {
+    const Eigen::Vector2d centre(tree.keyToCoord(static_cast<octomap::key_type>(p.x)),
+                                 tree.keyToCoord(static_cast<octomap::key_type>(p.y)));
+    const SceneObject* o = objectNear(objects, centre, res, 0.015);
+    char line[256];
+    std::snprintf(line, sizeof line, "%llu,%.4f,%.4f,%d,%d,%d,%d,%.2f,%.2f,%.1f,%d,%s,%s\n",
+                  static_cast<unsigned long long>(f.frame), centre.x(), centre.y(), p.above_frames,
+                  p.below_frames, p.above_run, p.below_run, 1e3 * p.above_sweep,
+                  1e3 * p.below_sweep, 1e3 * p.max_height, p.strong ? 1 : 0,
+                  kVerdicts[static_cast<int>(p.verdict)], o ? o->name.c_str() : "none");
+    csv << line;
+  }
+}
+
+std::size_t falseVoxels(const OccupancyMap& map, const std::vector<SceneObject>& objects) {
+  const octomap::OcTree& tree = map.tree();
+  std::size_t n = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const Eigen::Vector2d centre(it.getX(), it.getY());
+    if (objectNear(objects, centre, it.getSize(), 0.01)) continue;
+    const double voxels = it.getSize() / tree.getResolution();  // a pruned leaf holds n^3
+    n += static_cast<std::size_t>(std::lround(voxels * voxels * voxels));
+  }
+  return n;
+}
+
+}  // namespace multislit::apps

@@ -1,0 +1,24 @@
+// What multislit walk measures of the sweep: every pass of the slits over a place with evidence
+// (sweep_passes.csv, --measure-sweep), and the occupied voxels where no object lies.
+#pragma once
+
+#include "multislit/occupancy_map.h"
+#include "multislit/sim/walk.h"
+
+#include <ostream>
+#include <vector>
+
+namespace multislit::apps {
+
+/// The walk of a measurement: every pass recorded, and nothing ever occupied or stopping the
+/// robot, so that it walks straight over whatever its floor shows.
+void measureSweep(WalkConfig& config);
+
+void writeSweepPassHeader(std::ostream& csv);
+/// The passes that ended in frame `f`, each with the object within 15 mm of its place, if any.
+void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map);
+
+/// Occupied voxels of `map` farther than 1 cm from every object, seen from above.
+std::size_t falseVoxels(const OccupancyMap& map, const std::vector<SceneObject>& objects);
+
+}  // namespace multislit::apps
