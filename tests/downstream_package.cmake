@@ -41,3 +41,4 @@ run(configure ${CMAKE_COMMAND} -S ${DOWNSTREAM_SOURCE_DIR} -B ${build} -G ${GENE
 run(build ${CMAKE_COMMAND} --build ${build})
 run(run ${build}/downstream)
 run(run_core ${build}/downstream_core)
+run(run_openni2 ${build}/downstream_openni2)
