@@ -48,8 +48,10 @@ grep -q "GigE Vision camera" "$work/emulate.log" || fail "the emulated camera ne
   fail "map --camera: $(tail -5 "$work/camera.log")"
 grep -q "20 processed" "$work/camera/summary.txt" || fail "map --camera: not 20 frames"
 cam=$(occupied "$work/camera/summary.txt")
-echo "map --camera 127.0.0.1: 20 frames, $cam occupied voxels (the ball)"
-[[ $cam -gt 0 ]] || fail "the ball is not in the camera's map"
+echo "map --camera 127.0.0.1: 20 frames, $cam occupied voxels"
+# The camera stands still: nothing sweeps the floor, so no evidence accumulates (docs/walk.md,
+# "Evidence over the sweep") and even the ball stays unknown rather than guessed.
+[[ $cam -eq 0 ]] || fail "a view that never moved made $cam occupied voxels"
 kill $emulator 2>/dev/null
 wait $emulator 2>/dev/null
 
