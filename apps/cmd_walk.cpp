@@ -124,42 +124,12 @@ struct Recorder {
   int walking = 0;                     ///< frames walking straight
 };
 
-/// Whether the map holds an occupied voxel within 1 cm of the object, seen from above.
-bool mapped(const OccupancyMap& map, const SceneObject& o) {
-  Eigen::Vector2d lo, hi;
-  if (o.type == ShapeType::Cylinder) {
-    lo = o.axis_start.head<2>().cwiseMin(o.axis_end.head<2>());
-    hi = o.axis_start.head<2>().cwiseMax(o.axis_end.head<2>());
-  } else {
-    lo = hi = o.centre.head<2>();
-  }
-  const double reach = 0.01 + (o.type == ShapeType::Box ? 0.5 * o.size.head<2>().norm() : o.radius);
-  for (const MapCell& c : map.occupiedInBox(Eigen::Vector3d(lo.x() - reach, lo.y() - reach, -1),
-                                            Eigen::Vector3d(hi.x() + reach, hi.y() + reach, 1))) {
-    Footprint cell;
-    cell.centre = c.centre.head<2>();
-    cell.length = cell.width = c.size;
-    if (clearance(cell, o) <= 0.01) return true;
-  }
-  return false;
-}
-
 /// The true object that explains a place best (nearest seen from above, within 5 cm), as "the
 /// <name>"; `if_none` where no object lies (a false obstacle).
 std::string theObjectAt(const std::vector<SceneObject>& objects, const Eigen::Vector2d& at,
                         const std::string& if_none) {
-  std::string name = if_none;
-  double best = 0.05;
-  Footprint point;
-  point.centre = at;
-  for (const SceneObject& o : objects) {
-    const double d = clearance(point, o);
-    if (d < best) {
-      best = d;
-      name = "the " + o.name;
-    }
-  }
-  return name;
+  const SceneObject* o = objectNear(objects, at, 0.0, 0.05);
+  return o ? "the " + o->name : if_none;
 }
 
 std::string describeMotion(const WalkFrame& f, const std::vector<SceneObject>& objects,

@@ -7,9 +7,6 @@
 
 namespace multislit::apps {
 
-namespace {
-
-/// The object nearest to a cell of `size` at `centre` seen from above, within `reach` [m].
 const SceneObject* objectNear(const std::vector<SceneObject>& objects,
                               const Eigen::Vector2d& centre, double size, double reach) {
   Footprint cell;
@@ -27,7 +24,20 @@ const SceneObject* objectNear(const std::vector<SceneObject>& objects,
   return best;
 }
 
-}  // namespace
+bool mapped(const OccupancyMap& map, const SceneObject& o) {
+  Eigen::Vector2d lo, hi;
+  if (o.type == ShapeType::Cylinder) {
+    lo = o.axis_start.head<2>().cwiseMin(o.axis_end.head<2>());
+    hi = o.axis_start.head<2>().cwiseMax(o.axis_end.head<2>());
+  } else {
+    lo = hi = o.centre.head<2>();
+  }
+  const double reach = 0.01 + (o.type == ShapeType::Box ? 0.5 * o.size.head<2>().norm() : o.radius);
+  for (const MapCell& c : map.occupiedInBox(Eigen::Vector3d(lo.x() - reach, lo.y() - reach, -1),
+                                            Eigen::Vector3d(hi.x() + reach, hi.y() + reach, 1)))
+    if (objectNear({o}, c.centre.head<2>(), c.size, 0.01)) return true;
+  return false;
+}
 
 void measureSweep(WalkConfig& config) {
   SweepEvidenceConfig& sweep = config.pipeline.map.sweep;

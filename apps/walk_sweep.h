@@ -1,5 +1,6 @@
-// What multislit walk measures of the sweep: every pass of the slits over a place with evidence
-// (sweep_passes.csv, --measure-sweep), and the occupied voxels where no object lies.
+// What multislit walk measures of the map against the truth: every pass of the slits over a place
+// with evidence (sweep_passes.csv, --measure-sweep), the occupied voxels on an object and those
+// where no object lies.
 #pragma once
 
 #include "multislit/occupancy_map.h"
@@ -17,6 +18,14 @@ void measureSweep(WalkConfig& config);
 void writeSweepPassHeader(std::ostream& csv);
 /// The passes that ended in frame `f`, each with the object within 15 mm of its place, if any.
 void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map);
+
+/// The object nearest to a square cell of edge `size` at `centre`, seen from above, within
+/// `reach` [m]; nullptr when there is none.
+const SceneObject* objectNear(const std::vector<SceneObject>& objects,
+                              const Eigen::Vector2d& centre, double size, double reach);
+
+/// Whether the map holds an occupied voxel within 1 cm of the object, seen from above.
+bool mapped(const OccupancyMap& map, const SceneObject& object);
 
 /// Occupied voxels of `map` farther than 1 cm from every object, seen from above.
 std::size_t falseVoxels(const OccupancyMap& map, const std::vector<SceneObject>& objects);

@@ -176,8 +176,12 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
     last_ray = key;
     last_slit = p.slit;
   }
-  // The evidence judged over the sweep: only what is consistent as the slits sweep it is marked.
   sweep_->beginFrame(slit_sweep_->finish());
+  markEvidence(e);
+}
+
+void OccupancyMap::markEvidence(FrameEvidence& e) {
+  // The evidence judged over the sweep: only what is consistent as the slits sweep it is a hit.
   sweep_->addEvidence(e.sweep_points);
   for (std::size_t j = 0; j < e.sweep_points.size(); ++j) {
     const SweepPoint& p = e.sweep_points[j];
@@ -187,7 +191,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
     else if (v == SweepVerdict::Below && !p.above && p.strong)
       e.mark(e.sweep_keys[j], FrameEvidence::kHit);  // a hole: its floor-layer voxel
     else
-      e.mark(e.sweep_keys[j], FrameEvidence::kPending);
+      e.mark(e.sweep_keys[j], FrameEvidence::kPending);  // unknown
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <unordered_map>
 #include <utility>
@@ -41,11 +42,10 @@ void SweepEvidenceConfig::validate() const {
   require(weak_passes >= 1 && weak_passes <= 1000, "weak_passes", "must be in [1, 1000]");
   require(std::isfinite(forget_sweep) && forget_sweep > pass_gap && forget_sweep <= 100,
           "forget_sweep", "must be in (pass_gap, 100] m");
-  require(neighbourhood >= 0 && neighbourhood <= 5, "neighbourhood", "must be in [0, 5] cells");
 }
 
 struct SweepEvidence::State {
-  /// The sweeps at which one sign was seen in the counted frames of a pass.
+  /// The counted frames of a pass with one sign, and the longest run of consecutive ones.
   struct SignRange {
     int frames = 0;                ///< counted frames of the pass with this sign
     int run = 0;                   ///< of them in consecutive frames, up to the last one
@@ -64,15 +64,20 @@ struct SweepEvidence::State {
         best_extent = extent;
       }
     }
+    /// Seen, and the other sign in at most `share` of as many frames.
+    bool oneSigned(const SignRange& other, double share) const {
+      return frames > 0 && other.frames <= share * frames;
+    }
   };
 
-  /// What one frame shows around a column (its neighbourhood).
+  /// What one frame shows in a column.
   struct FrameFlags {
     bool above = false, below = false;  ///< any evidence of the sign
     bool strong = false;                ///< any point of an obstacle group
     bool tall = false;                  ///< a tall point
     float max_height = 0.0f;            ///< of the strong points [m]
   };
+
   /// One place: the pass of the slits over it under way, and what earlier passes left.
   struct Place {
     SignRange above, below;  ///< counted frames of the pass under way
@@ -88,11 +93,40 @@ struct SweepEvidence::State {
     int weak_passes = 0;           ///< ended passes of weak evidence above only, in a row
     SweepVerdict verdict = SweepVerdict::Pending;  ///< judged this frame or last
   };
+
   std::unordered_map<std::uint64_t, Place> places;
-  std::unordered_map<std::uint64_t, FrameFlags> own;    ///< this frame, per point column
-  std::unordered_map<std::uint64_t, FrameFlags> frame;  ///< this frame, per neighbourhood
+  std::unordered_map<std::uint64_t, FrameFlags> frame;  ///< this frame, per column
   std::vector<SweepPass> passes;
+
+  /// A pass is consistent when one sign lasts min_frames consecutive frames over min_sweep, with
+  /// little of the other sign.
+  static bool consistent(const SignRange& sign, const SignRange& other,
+                         const SweepEvidenceConfig& c) {
+    return sign.best >= c.min_frames && sign.best_extent >= c.min_sweep &&
+           sign.oneSigned(other, c.max_opposite_share);
+  }
+  void endPass(std::uint64_t key, Place& place, const SweepEvidenceConfig& c);
+  /// The frame's evidence into the pass under way, at `sweep` in frame `frame`.
+  static void update(Place& place, const FrameFlags& flags, const SweepEvidenceConfig& c,
+                     double sweep, std::uint64_t frame);
+  SweepVerdict judge(std::uint64_t key, const Place& place, const SweepEvidenceConfig& c) const;
+  /// A line of weak evidence (a grout line, a board gap) holds the neighbours on both sides along
+  /// x or along y; a screw a few mm across holds one or two cells.
+  bool onWeakLine(std::uint64_t key, int weak_passes) const;
+
+  template <typename Drop>
+  void forget(Drop drop) {
+    for (auto it = places.begin(); it != places.end();)
+      it = drop(*it) ? places.erase(it) : std::next(it);
+  }
 };
+
+namespace {
+
+/// Frames between two sweeps of the places for those left far behind.
+constexpr std::uint64_t kForgetInterval = 30;
+
+}  // namespace
 
 SweepEvidence::SweepEvidence(const SweepEvidenceConfig& config)
     : config_(config), state_(std::make_unique<State>()) {
@@ -108,33 +142,18 @@ std::size_t SweepEvidence::places() const { return state_->places.size(); }
 void SweepEvidence::beginFrame(double step) {
   ++frame_;
   if (std::isfinite(step) && std::abs(step) > config_.dead_zone) sweep_ += step;
+  if (frame_ % kForgetInterval != 0) return;
   // Evidence the slits have left far behind: forgotten.
-  if (frame_ % 30 != 0) return;
-  for (auto it = state_->places.begin(); it != state_->places.end();) {
-    if (std::abs(sweep_ - it->second.last) > config_.forget_sweep)
-      it = state_->places.erase(it);
-    else
-      ++it;
-  }
+  state_->forget([&](const auto& place) {
+    return std::abs(sweep_ - place.second.last) > config_.forget_sweep;
+  });
 }
-
-namespace {
-
-using SignRange = SweepEvidence::State::SignRange;
-using FrameFlags = SweepEvidence::State::FrameFlags;
-
-bool oneSigned(const SignRange& sign, const SignRange& other, double share) {
-  return sign.frames > 0 && other.frames <= share * sign.frames;
-}
-
-}  // namespace
 
 void SweepEvidence::addEvidence(const std::vector<SweepPoint>& points) {
   State& s = *state_;
-  s.own.clear();
   s.frame.clear();
   for (const SweepPoint& p : points) {
-    FrameFlags& f = s.own[packColumn(p.x, p.y)];
+    State::FrameFlags& f = s.frame[packColumn(p.x, p.y)];
     f.above = f.above || p.above;
     f.below = f.below || !p.above;
     if (!p.strong) continue;
@@ -142,79 +161,69 @@ void SweepEvidence::addEvidence(const std::vector<SweepPoint>& points) {
     if (p.above) f.max_height = std::max(f.max_height, p.height);
     f.tall = f.tall || (p.above && p.tall);
   }
-  const int n = config_.neighbourhood;
-  for (const auto& [key, f] : s.own)
-    for (int dx = -n; dx <= n; ++dx)
-      for (int dy = -n; dy <= n; ++dy) {
-        FrameFlags& g = s.frame[packColumn(columnX(key) + dx, columnY(key) + dy)];
-        g.above = g.above || f.above;
-        g.below = g.below || f.below;
-        g.strong = g.strong || f.strong;
-        g.tall = g.tall || f.tall;
-        g.max_height = std::max(g.max_height, f.max_height);
-      }
-  const SweepEvidenceConfig& c = config_;
   for (const auto& [key, f] : s.frame) {
-    State::Place& p = s.places[key];
-    // A pass is consistent when one sign lasts min_frames consecutive frames over min_sweep,
-    // with little of the other sign.
-    const auto swept = [&](const SignRange& sign, const SignRange& other) {
-      return sign.best >= c.min_frames && sign.best_extent >= c.min_sweep &&
-             oneSigned(sign, other, c.max_opposite_share);
-    };
-    if (p.in_pass && std::abs(sweep_ - p.last) > c.pass_gap) {
-      if (c.record_passes)
-        s.passes.push_back(SweepPass{columnX(key), columnY(key), p.above.frames, p.below.frames,
-                                     p.above.best, p.below.best, p.above.best_extent,
-                                     p.below.best_extent, p.max_height, p.strong, p.verdict});
-      // Consistent passes in a row: one slit after the other found the same.
-      p.above_passes = swept(p.above, p.below) ? p.above_passes + 1 : 0;
-      p.below_passes = swept(p.below, p.above) ? p.below_passes + 1 : 0;
-      // Weak evidence alone, above and never below, slit after slit (a screw under the threshold).
-      p.weak_passes =
-          !p.strong && p.above.frames > 0 && p.below.frames == 0 ? p.weak_passes + 1 : 0;
-      p.in_pass = false;
-    }
-    if (!p.in_pass) {
-      p.above = p.below = SignRange{};
-      p.strong = false;
-      p.max_height = 0.0f;
-      p.in_pass = true;
-      p.counted = std::numeric_limits<double>::quiet_NaN();
-    }
-    // Only a view that moved is new evidence: standing or turning repeats the same lobes.
-    if (!f.tall) {
-      p.tall_run = 0;
-    } else if (!(std::abs(sweep_ - p.counted) < c.min_step)) {  // tall, in a view that moved
-      p.tall_run = p.tall_run > 0 && p.tall_frame + 1 == frame_ ? p.tall_run + 1 : 1;
-      p.tall_frame = frame_;
-    }
-    if (!(std::abs(sweep_ - p.counted) < c.min_step)) {
-      if (f.above) p.above.add(sweep_, frame_);
-      if (f.below) p.below.add(sweep_, frame_);
-      p.counted = sweep_;
-    }
-    p.last = sweep_;
-    p.strong = p.strong || f.strong;
-    p.max_height = std::max(p.max_height, f.max_height);
-
-    // The verdict, from this pass and the passes before it.
-    if (p.tall_run >= c.tall_frames || p.above_passes + swept(p.above, p.below) >= c.min_passes ||
-        (p.weak_passes >= c.weak_passes && !onWeakLine(key)))
-      p.verdict = SweepVerdict::Above;
-    else if (p.below_passes + swept(p.below, p.above) >= c.min_passes)
-      p.verdict = SweepVerdict::Below;
-    else
-      p.verdict = SweepVerdict::Pending;
+    State::Place& place = s.places[key];
+    if (place.in_pass && std::abs(sweep_ - place.last) > config_.pass_gap)
+      s.endPass(key, place, config_);
+    State::update(place, f, config_, sweep_, frame_);
+    place.verdict = s.judge(key, place, config_);
   }
 }
 
-bool SweepEvidence::onWeakLine(std::uint64_t key) const {
-  // A line of weak evidence (a grout line, a board gap) holds the neighbours on both sides along
-  // x or along y; a screw a few mm across holds one or two cells.
+void SweepEvidence::State::endPass(std::uint64_t key, Place& p, const SweepEvidenceConfig& c) {
+  if (c.record_passes)
+    passes.push_back(SweepPass{columnX(key), columnY(key), p.above.frames, p.below.frames,
+                               p.above.best, p.below.best, p.above.best_extent, p.below.best_extent,
+                               p.max_height, p.strong, p.verdict});
+  // Consistent passes in a row: one slit after the other found the same.
+  p.above_passes = consistent(p.above, p.below, c) ? p.above_passes + 1 : 0;
+  p.below_passes = consistent(p.below, p.above, c) ? p.below_passes + 1 : 0;
+  // Weak evidence alone, above and never below, slit after slit (a screw under the threshold).
+  p.weak_passes = !p.strong && p.above.frames > 0 && p.below.frames == 0 ? p.weak_passes + 1 : 0;
+  p.in_pass = false;
+}
+
+void SweepEvidence::State::update(Place& p, const FrameFlags& f, const SweepEvidenceConfig& c,
+                                  double sweep, std::uint64_t frame) {
+  if (!p.in_pass) {
+    p.above = p.below = SignRange{};
+    p.strong = false;
+    p.max_height = 0.0f;
+    p.in_pass = true;
+    p.counted = std::numeric_limits<double>::quiet_NaN();
+  }
+  // Only a view that moved is new evidence: standing or turning repeats the same lobes.
+  const bool moved = !(std::abs(sweep - p.counted) < c.min_step);
+  if (!f.tall) {
+    p.tall_run = 0;
+  } else if (moved) {
+    p.tall_run = p.tall_run > 0 && p.tall_frame + 1 == frame ? p.tall_run + 1 : 1;
+    p.tall_frame = frame;
+  }
+  if (moved) {
+    if (f.above) p.above.add(sweep, frame);
+    if (f.below) p.below.add(sweep, frame);
+    p.counted = sweep;
+  }
+  p.last = sweep;
+  p.strong = p.strong || f.strong;
+  p.max_height = std::max(p.max_height, f.max_height);
+}
+
+SweepVerdict SweepEvidence::State::judge(std::uint64_t key, const Place& p,
+                                         const SweepEvidenceConfig& c) const {
+  if (p.tall_run >= c.tall_frames ||
+      p.above_passes + consistent(p.above, p.below, c) >= c.min_passes ||
+      (p.weak_passes >= c.weak_passes && !onWeakLine(key, c.weak_passes)))
+    return SweepVerdict::Above;
+  if (p.below_passes + consistent(p.below, p.above, c) >= c.min_passes) return SweepVerdict::Below;
+  return SweepVerdict::Pending;
+}
+
+bool SweepEvidence::State::onWeakLine(std::uint64_t key, int weak_passes) const {
   const auto weak = [&](int dx, int dy) {
-    const auto it = state_->places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
-    return it != state_->places.end() && 2 * it->second.weak_passes >= config_.weak_passes;
+    const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
+    return it != places.end() && 2 * it->second.weak_passes >= weak_passes;
   };
   return (weak(-1, 0) && weak(1, 0)) || (weak(0, -1) && weak(0, 1));
 }
@@ -225,13 +234,10 @@ SweepVerdict SweepEvidence::verdictAt(std::int32_t x, std::int32_t y) const {
 }
 
 void SweepEvidence::crop(std::int32_t x, std::int32_t y, std::int32_t half_size) {
-  for (auto it = state_->places.begin(); it != state_->places.end();) {
-    if (std::abs(columnX(it->first) - x) > half_size ||
-        std::abs(columnY(it->first) - y) > half_size)
-      it = state_->places.erase(it);
-    else
-      ++it;
-  }
+  state_->forget([&](const auto& place) {
+    return std::abs(columnX(place.first) - x) > half_size ||
+           std::abs(columnY(place.first) - y) > half_size;
+  });
 }
 
 std::vector<SweepPass> SweepEvidence::takePasses() { return std::exchange(state_->passes, {}); }

@@ -138,6 +138,7 @@ class OccupancyMap {
   void collect(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
                const ObstacleResult& obstacles, const Eigen::Isometry3d& world_from_camera,
                const Eigen::Vector3d& light_origin_camera, FrameEvidence& evidence);
+  void markEvidence(FrameEvidence& evidence);
   void addFreeRay(const Eigen::Vector3d& floor_point, const Eigen::Vector3d& light,
                   const octomap::OcTreeKey& floor_key, FrameEvidence& evidence) const;
   MapUpdateStats apply(FrameEvidence& evidence);

@@ -42,7 +42,6 @@ struct SweepEvidenceConfig {
   int weak_passes = 6;
   /// Evidence the slits have left this far behind is forgotten (memory stays flat).
   double forget_sweep = 0.15;  ///< [m]
-  int neighbourhood = 0;       ///< places are judged with this many cells around them [cells]
   bool record_passes = false;  ///< keep every ended pass for takePasses() (measurement)
 
   void validate() const;  ///< throws std::invalid_argument naming the field
@@ -102,11 +101,8 @@ class SweepEvidence {
   void crop(std::int32_t x, std::int32_t y, std::int32_t half_size);
   std::vector<SweepPass> takePasses();  ///< the passes ended since the last call
 
- public:
-  struct State;  ///< (private to the implementation)
-
  private:
-  bool onWeakLine(std::uint64_t key) const;
+  struct State;  ///< the places and their passes (defined in the implementation)
 
   SweepEvidenceConfig config_;
   std::unique_ptr<State> state_;
