@@ -92,7 +92,7 @@ struct Tally {
   }
 };
 
-// One row of the README's table: the frames whose sigma lies in `name`'s range.
+// One row of docs/accuracy.md's table: the frames whose sigma lies in `name`'s range.
 inline void printRow(const char* name, const Tally& s) {
   std::printf(
       "| %s | %zu | %.4f | %.3f (%zu/%zu) | %.3f (%zu), %.3f | %.2f %% | %zu / %zu | %zu / "

@@ -16,7 +16,8 @@ using namespace multislit::robustness;
 // (one under the sanitizers).
 //
 // What holds today is asserted; the targets that do not (recall of >= 5 mm crossings
-// 0.98 and false points 0.1 % over every photometry) are printed and left to the README's table.
+// 0.98 and false points 0.1 % over every photometry) are printed and left to the table of
+// docs/accuracy.md.
 // The slit's centre is measured across the stripe (ExtractorConfig::across_stripe), not along
 // the row, which the rotated camera lays nearly along it: a tile's edge or grout crossing the
 // stripe no longer moves the centre by pixels, and the reference's slits are fitted robustly (a

@@ -1,8 +1,8 @@
 // multislit_ros: the multi-slit sensor in a ROS 1 graph. Runs a camera (~camera), a recording
 // (~sequence) or the simulator (~simulate) through the chain of `multislit map` and publishes the
 // organized RDMap, the floor, the obstacle groups, the OctoMap, the walker's decision and
-// diagnostics (README: topics, frames and parameters). When the frames end the node stays up, its
-// map latched, until it is shut down (Ctrl-C, rosnode kill, roslaunch).
+// diagnostics (docs/ros.md: topics, frames and parameters). When the frames end the node stays up,
+// its map latched, until it is shut down (Ctrl-C, rosnode kill, roslaunch).
 //   build/apps/ros/pkg/multislit_ros/multislit_ros _camera:=192.168.1.20 _poses:=tf
 //       _calibration:=calib.yaml _sensor:=sensor.yaml   (on one line)
 #include "node.h"

@@ -14,7 +14,7 @@
 namespace multislit {
 
 struct ExtractorConfig {
-  Estimator estimator = Estimator::Gaussian;  ///< chosen by measurement, see README
+  Estimator estimator = Estimator::Gaussian;  ///< measured: docs/sensor-and-calibration.md
   /// Slit peak above its background [full scale]: 0.03, where the paper's method needs 0.06; over
   /// 40 random photometries the recall of >= 5 mm crossings rose from 0.82 to 0.89 with the false
   /// points unchanged. With the laser off, texture still passes (the cloud is not empty), but no
