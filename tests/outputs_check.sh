@@ -72,7 +72,7 @@ interrupt detect 2 "$M" detect --calibration c.yaml --out d.jsonl "${frames[@]}"
 grep -qv '}$' d.jsonl && fail "a JSON line is cut"
 echo "detect: interrupted after $(wc -l <d.jsonl) whole lines"
 interrupt walk 4 "$M" walk --synthesize --frames 100000 --out w
-whole_lines w/obstacles.csv 23
+whole_lines w/obstacles.csv 25
 grep -q "interrupted (Ctrl-C) at frame" w/summary.txt || fail "walk: no summary"
 [[ -s w/map.bt && -s w/map_top.png ]] || fail "walk: no map"
 echo "walk: interrupted after $(($(wc -l <w/obstacles.csv) - 1)) whole rows, summary and map"
