@@ -37,6 +37,7 @@ void SweepEvidenceConfig::validate() const {
           "max_opposite_share", "must be in [0, 1]");
   require(std::isfinite(tall_height) && tall_height > 0 && tall_height <= 1, "tall_height",
           "must be in (0, 1] m");
+  require(tall_points >= 1 && tall_points <= 100000, "tall_points", "must be in [1, 100000]");
   require(tall_frames >= 1 && tall_frames <= 1000, "tall_frames", "must be in [1, 1000]");
   require(min_passes >= 1 && min_passes <= 1000, "min_passes", "must be in [1, 1000]");
   require(weak_passes >= 1 && weak_passes <= 1000, "weak_passes", "must be in [1, 1000]");
@@ -74,7 +75,7 @@ struct SweepEvidence::State {
   struct FrameFlags {
     bool above = false, below = false;  ///< any evidence of the sign
     bool strong = false;                ///< any point of an obstacle group
-    bool tall = false;                  ///< a tall point
+    int tall = 0;                       ///< tall points
     float max_height = 0.0f;            ///< of the strong points [m]
   };
 
@@ -110,9 +111,9 @@ struct SweepEvidence::State {
   static void update(Place& place, const FrameFlags& flags, const SweepEvidenceConfig& c,
                      double sweep, std::uint64_t frame);
   SweepVerdict judge(std::uint64_t key, const Place& place, const SweepEvidenceConfig& c) const;
-  /// A line of weak evidence (a grout line, a board gap) holds the neighbours on both sides along
-  /// x or along y; a screw a few mm across holds one or two cells.
-  bool onWeakLine(std::uint64_t key, int weak_passes) const;
+  /// A line of weak evidence (a grout line, a board gap) gives the neighbours on both sides along
+  /// x or along y weak passes too; a screw a few mm across lies in one or two cells.
+  bool onWeakLine(std::uint64_t key) const;
 
   template <typename Drop>
   void forget(Drop drop) {
@@ -159,7 +160,7 @@ void SweepEvidence::addEvidence(const std::vector<SweepPoint>& points) {
     if (!p.strong) continue;
     f.strong = true;
     if (p.above) f.max_height = std::max(f.max_height, p.height);
-    f.tall = f.tall || (p.above && p.tall);
+    f.tall += p.above && p.tall;
   }
   for (const auto& [key, f] : s.frame) {
     State::Place& place = s.places[key];
@@ -194,7 +195,7 @@ void SweepEvidence::State::update(Place& p, const FrameFlags& f, const SweepEvid
   }
   // Only a view that moved is new evidence: standing or turning repeats the same lobes.
   const bool moved = !(std::abs(sweep - p.counted) < c.min_step);
-  if (!f.tall) {
+  if (f.tall < c.tall_points) {
     p.tall_run = 0;
   } else if (moved) {
     p.tall_run = p.tall_run > 0 && p.tall_frame + 1 == frame ? p.tall_run + 1 : 1;
@@ -214,16 +215,16 @@ SweepVerdict SweepEvidence::State::judge(std::uint64_t key, const Place& p,
                                          const SweepEvidenceConfig& c) const {
   if (p.tall_run >= c.tall_frames ||
       p.above_passes + consistent(p.above, p.below, c) >= c.min_passes ||
-      (p.weak_passes >= c.weak_passes && !onWeakLine(key, c.weak_passes)))
+      (p.weak_passes >= c.weak_passes && !onWeakLine(key)))
     return SweepVerdict::Above;
   if (p.below_passes + consistent(p.below, p.above, c) >= c.min_passes) return SweepVerdict::Below;
   return SweepVerdict::Pending;
 }
 
-bool SweepEvidence::State::onWeakLine(std::uint64_t key, int weak_passes) const {
+bool SweepEvidence::State::onWeakLine(std::uint64_t key) const {
   const auto weak = [&](int dx, int dy) {
     const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
-    return it != places.end() && 2 * it->second.weak_passes >= weak_passes;
+    return it != places.end() && it->second.weak_passes > 0;
   };
   return (weak(-1, 0) && weak(1, 0)) || (weak(0, -1) && weak(0, 1));
 }

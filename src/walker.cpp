@@ -48,6 +48,8 @@ void WalkerConfig::validate() const {
   require(known_margin >= 0, "known_margin", "must be >= 0 m");
   require(std::isfinite(sudden_min_height) && sudden_min_height >= 0 && sudden_min_height <= 1,
           "sudden_min_height", "must be in [0, 1] m");
+  require(sudden_min_points >= 1 && sudden_min_points <= 100000, "sudden_min_points",
+          "must be in [1, 100000]");
   require(sudden_frames >= 1 && sudden_frames <= 1000, "sudden_frames", "must be in [1, 1000]");
   require(max_turn > 0 && max_turn <= 180, "max_turn", "must be in (0, 180] deg");
 }
@@ -66,7 +68,10 @@ std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, cons
   for (const Obstacle& o : obstacles.obstacles) {  // nearest first
     if (!(o.distance <= config_.near_distance)) break;
     if (o.max.y() < -corridor || o.min.y() > corridor || o.max.x() < 0) continue;
-    if (!(o.height >= config_.sudden_min_height)) continue;  // a texture lobe reaches less
+    // A texture lobe reaches less high, a stray group holds fewer points.
+    if (!(o.height >= config_.sudden_min_height) ||
+        o.pointCount() < static_cast<std::size_t>(config_.sudden_min_points))
+      continue;
     // Its box on the floor, in the world.
     Candidate c{Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()),
                 Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity()), 1};

@@ -231,6 +231,7 @@ TEST(Walker, StopsForASuddenObstacleThenWalks) {
   ball.max = Eigen::Vector3d(0.13, 0.04, 0.04);
   ball.distance = 0.09 - foot.toe();
   ball.height = 0.04;
+  ball.indices.assign(37, 0);  // the points the ball gives where it lands
   seen.obstacles.push_back(ball);
   // Seen in one frame only: a floor's texture lobe lasts one or two.
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
@@ -238,6 +239,11 @@ TEST(Walker, StopsForASuddenObstacleThenWalks) {
   ASSERT_TRUE(sudden);
   // No higher than a texture lobe reaches: never sudden, however long it is seen.
   seen.obstacles[0].height = config.sudden_min_height - 0.001;
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  // Fewer points than a ball gives (a stray group): never sudden either.
+  seen.obstacles[0] = ball;
+  seen.obstacles[0].indices.resize(static_cast<std::size_t>(config.sudden_min_points) - 1);
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   seen.obstacles[0] = ball;

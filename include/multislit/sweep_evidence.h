@@ -34,7 +34,8 @@ struct SweepEvidenceConfig {
   /// Higher than texture lobes mostly reach: occupied after tall_frames consecutive frames of a
   /// moving view (a ball thrown in front of a walking robot), and kept while it is seen so.
   double tall_height = 0.025;  ///< [m]
-  int tall_frames = 2;         ///< [-]
+  int tall_points = 3;  ///< ... of at least this many tall points in the column in a frame [-]
+  int tall_frames = 2;  ///< [-]
   /// Consistent passes in a row, i.e. slits one after the other, that occupy a place [-]
   int min_passes = 2;
   /// Passes in a row with only weak evidence (below the obstacle threshold), above the floor and

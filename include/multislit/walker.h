@@ -40,6 +40,8 @@ struct WalkerConfig {
   /// Only an obstacle this high above the floor stops the robot: higher than the lobes a floor's
   /// texture makes in one frame (docs/walk.md).
   double sudden_min_height = 0.025;  ///< [m]
+  /// ... holding at least this many points (a lobe or a stray group holds few) [-]
+  int sudden_min_points = 10;
   /// ... seen in this many consecutive frames (a lobe lasts one or two), in places that overlap
   /// within known_margin.
   int sudden_frames = 2;    ///< [-]
