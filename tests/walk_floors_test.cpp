@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,9 @@ std::string nameOf(const Floor& f) {
   return name;
 }
 
+// CTest's test list names the floor, not the bytes of the struct.
+void PrintTo(const Floor& f, std::ostream* os) { *os << nameOf(f); }
+
 class BareFloor : public ::testing::TestWithParam<Floor> {};
 
 }  // namespace
@@ -71,6 +75,63 @@ TEST_P(BareFloor, NeverBecomesAnObstacle) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Walk, BareFloor, ::testing::ValuesIn(floors()),
+                         [](const ::testing::TestParamInfo<Floor>& param) {
+                           return nameOf(param.param);
+                         });
+
+namespace {
+
+class WithObjects : public ::testing::TestWithParam<Floor> {};
+
+/// Occupied voxels within 3 cm of `at`, seen from above.
+std::size_t occupiedNear(const OccupancyMap& map, const Eigen::Vector2d& at) {
+  const double m = 0.03;
+  return map
+      .occupiedInBox(Eigen::Vector3d(at.x() - m, at.y() - m, -1),
+                     Eigen::Vector3d(at.x() + m, at.y() + m, 1))
+      .size();
+}
+
+}  // namespace
+
+TEST_P(WithObjects, StopsForTheBallTurnsFromTheCableTouchesNothing) {
+  WalkSimulation walk(walkOn(GetParam(), true));
+  const WalkSceneConfig& scene = walk.config().scene;
+  // Under the sanitizers: the ball only (its landing, the stop and its clearing).
+  const int frames = frameCount(900, scene.ball_roll_frame + 61);
+  int stopped = -1, cleared = -1, turned_for_cable = -1, touching = 0;
+  Eigen::Vector2d landed = Eigen::Vector2d::Zero();
+  for (int k = 0; k < frames; ++k) {
+    const WalkFrame f = walk.step();
+    if (k == scene.ball_frame) landed = f.body.toWorld(scene.ball_landing);
+    if (stopped < 0 && k >= scene.ball_frame && f.walker.reason == Reason::SuddenObstacle)
+      stopped = k;
+    if (cleared < 0 && k >= scene.ball_roll_frame && occupiedNear(walk.map(), landed) == 0)
+      cleared = k;
+    if (turned_for_cable < 0 && f.walker.command == Command::Turn &&
+        !f.walker.check.cells.empty() &&
+        std::abs(f.walker.check.cells.front().centre.x() - scene.cable_start.x()) < 0.03)
+      turned_for_cable = k;
+    touching += f.footstep && f.footstep_clearance <= 0.0;
+  }
+  std::printf(
+      "%s: stopped at %d (the ball lands at %d), the ball cleared at %d (rolls at %d), "
+      "turned for the cable at %d, %d footsteps touching\n",
+      nameOf(GetParam()).c_str(), stopped, scene.ball_frame, cleared, scene.ball_roll_frame,
+      turned_for_cable, touching);
+  EXPECT_GE(stopped, scene.ball_frame);
+  EXPECT_LE(stopped, scene.ball_frame + 2);
+  EXPECT_GE(cleared, scene.ball_roll_frame);
+  EXPECT_LE(cleared, scene.ball_roll_frame + 60);
+  EXPECT_EQ(touching, 0);
+  if (!kSanitized) {
+    EXPECT_GE(turned_for_cable, 0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Walk, WithObjects,
+                         ::testing::Values(Floor{"default", 1}, Floor{"tiles", 1},
+                                           Floor{"carpet", 1}, Floor{"speckle", 1}),
                          [](const ::testing::TestParamInfo<Floor>& param) {
                            return nameOf(param.param);
                          });
