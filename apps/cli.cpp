@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -144,16 +145,35 @@ std::string ArgParser::help() const {
   out << "usage: " << usage_name_ << " [options]"
       << (positional_name_.empty() ? "" : " " + positional_name_) << "\n\n"
       << summary_ << "\n\noptions:\n";
+  // One column for the names, as wide as the widest.
+  const auto nameOf = [&](const std::string& name) {
+    return "  --" + name + (specs_.at(name).is_flag ? "" : " V");
+  };
+  std::size_t width = std::string("  --help").size();
+  for (const std::string& name : order_) width = std::max(width, nameOf(name).size());
+  // The text wrapped at 100 columns, its lines under each other.
+  const auto line = [&](std::string left, const std::string& text) {
+    left.resize(width + 2, ' ');
+    std::istringstream words(text);
+    std::string word, row = left;
+    for (bool first = true; words >> word; first = false) {
+      if (!first && row.size() + 1 + word.size() > 100) {
+        out << row << "\n";
+        row = std::string(width + 2, ' ') + word;
+      } else {
+        row += (first ? "" : " ") + word;
+      }
+    }
+    out << row << "\n";
+  };
   for (const std::string& name : order_) {
     const Spec& s = specs_.at(name);
-    std::string left = "  --" + name + (s.is_flag ? "" : " V");
-    if (left.size() < 26) left.resize(26, ' ');
-    out << left << " " << s.help;
-    if (!s.is_flag)
-      out << " (default: " << (s.default_value.empty() ? "none" : s.default_value) << ")";
-    out << "\n";
+    // The default, unless there is none or the text says it itself.
+    const bool show_default =
+        !s.is_flag && !s.default_value.empty() && s.help.find("(default") == std::string::npos;
+    line(nameOf(name), s.help + (show_default ? " (default: " + s.default_value + ")" : ""));
   }
-  out << "  --help                     this text\n";
+  line("  --help", "this text");
   if (!positional_name_.empty())
     out << "\n  " << positional_name_ << ": " << positional_help_ << "\n";
   return out.str();

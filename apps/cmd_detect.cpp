@@ -118,10 +118,10 @@ constexpr const char* kSummary =
     "dk = A u + B v + C, inliers, residual_std [px], sigma_px (the sigma used),\n"
     "sigma_estimate_px (before clamping), threshold_px, off_plane_count (every point off the\n"
     "plane), obstacle_count (points listed in obstacle_points), rejected_groups, stamp_us,\n"
-    "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max}, "
-    "...] (px) and\n"
-    "obstacle_points [[u, v, dk], ...] (reference position and disparity, px): the points of\n"
-    "the groups, or with --raw every point off the plane. null: not found or not measured.";
+    "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max},\n"
+    "...] (px) and obstacle_points [[u, v, dk], ...] (reference position and disparity, px):\n"
+    "the points of the groups, or with --raw every point off the plane. null: not found or not\n"
+    "measured.";
 
 void addDetectOptions(cli::ArgParser& args) {
   addReferenceOptions(args);

@@ -37,7 +37,8 @@ const Command kCommands[] = {
 };
 
 void printUsage(std::ostream& out) {
-  out << "usage: multislit <command> [options]   (multislit <command> --help for its options)\n\n"
+  out << "usage: multislit <command> [options]   (multislit <command> --help for its options)\n"
+      << "       multislit --version\n\n"
       << "commands:\n";
   for (const Command& c : kCommands)
     out << "  " << c.name << std::string(12 - std::strlen(c.name), ' ') << c.summary << "\n";
@@ -46,6 +47,10 @@ void printUsage(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && std::strcmp(argv[1], "--version") == 0) {
+    std::cout << "multislit " << MULTISLIT_VERSION << "\n";
+    return 0;
+  }
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     printUsage(argc < 2 ? std::cerr : std::cout);
     return argc < 2 ? 2 : 0;

@@ -60,4 +60,15 @@ sed 's/slit_count: 15/slit_count: 13/' s/sensor.yaml >s13.yaml
 "$M" calibrate --reference s13/reference.png --slits 13 --out c13.yaml >out.log 2>&1 ||
   fail "calibrate, 13 slits: $(cat out.log)"
 grep -q "13 slits" out.log || fail "calibrate, 13 slits: $(cat out.log)"
-echo "cli_check: $refused_count refusals, each with its message and exit code; 13 slits walk and calibrate"
+
+# --version, and every command's --help: no "(default: none)", no line over 100 columns.
+"$M" --version | grep -qE '^multislit [0-9]+\.[0-9]+\.[0-9]+$' || fail "--version: $("$M" --version)"
+commands=$("$M" --help | awk '/^commands:/ {on = 1; next} on && NF {print $1}')
+[[ -n $commands ]] || fail "multislit --help lists no command"
+for c in $commands; do
+  "$M" "$c" --help >help.txt 2>&1 || fail "$c --help: rc $?"
+  ! grep -q "(default: none)" help.txt || fail "$c --help says (default: none)"
+  ! awk 'length > 100 { exit 1 }' help.txt && fail "$c --help has a line over 100 columns"
+done
+echo "cli_check: $refused_count refusals, each with its message and exit code; 13 slits walk and" \
+  "calibrate; --version and $(wc -w <<<"$commands") commands' help"
