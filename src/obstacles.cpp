@@ -2,6 +2,7 @@
 #include "multislit/plane_model.h"
 
 #include "config_check.h"
+#include "obstacle_surface.h"
 
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
@@ -107,6 +108,12 @@ void ObstacleClustererConfig::validate() const {
   require(min_points >= 1, "min_points", "must be >= 1");
   require(min_run >= 1, "min_run", "must be >= 1");
   require(max_hops >= 0, "max_hops", "must be >= 0");
+  require(std::isfinite(max_step) && max_step > 0, "max_step", "must be > 0 px");
+}
+
+std::size_t Obstacle::surfacePointsAbove(double least) const {
+  return static_cast<std::size_t>(std::count_if(surface_heights.begin(), surface_heights.end(),
+                                                [least](float h) { return h >= least; }));
 }
 
 std::size_t ObstacleResult::pointCount() const {
@@ -339,6 +346,9 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
   o.distance = inf;
   std::vector<double> heights;
   std::set<int> slits;
+  const auto height = [&](const Eigen::Vector3d& camera) {
+    return metric.valid ? metric.height(camera) : (robot_from_camera * camera).z();
+  };
   for (const auto i : indices) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
     slits.insert(p.slit);
@@ -350,7 +360,7 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
     o.centroid += robot;
     o.min = o.min.cwiseMin(robot);
     o.max = o.max.cwiseMax(robot);
-    heights.push_back(metric.valid ? metric.height(camera) : robot.z());
+    heights.push_back(height(camera));
     const double dx = std::max(0.0, std::abs(robot.x()) - feet_.toe());
     const double dy = std::max(0.0, std::abs(robot.y()) - feet_.halfWidth());
     o.distance = std::min(o.distance, std::hypot(dx, dy));
@@ -368,6 +378,11 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
     o.centroid.setConstant(nan);
     o.min = o.max = o.centroid;
     o.length = o.width = o.height = o.distance = nan;
+  }
+  o.surface = detail::surfacePoints(cloud, indices, floor.plane, config_.max_step, config_.min_run);
+  for (const auto i : o.surface) {
+    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
+    if (hasXYZ(p)) o.surface_heights.push_back(static_cast<float>(height({p.x, p.y, p.z})));
   }
   o.indices = std::move(indices);
   return o;

@@ -140,8 +140,10 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
       if (!hasXYZ(cloud[idx])) continue;
       const Eigen::Vector3d m = map.pointAt(idx);
       const bool above = planeResidual(cloud[idx], floor.plane) > 0;
-      if (m.z() <= config_.max_height)
-        evidence(m, above, true, above && m.z() >= sweep.tall_height);
+      // Tall only on its surface: speckle where a stripe was lost reaches any height.
+      const bool tall = above && m.z() >= sweep.tall_height &&
+                        std::binary_search(o.surface.begin(), o.surface.end(), i);
+      if (m.z() <= config_.max_height) evidence(m, above, true, tall);
     }
   for (const auto i : obstacles.rejected) {
     const auto idx = static_cast<std::size_t>(i);

@@ -7,6 +7,7 @@
 #include <iterator>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 namespace multislit {
@@ -41,6 +42,7 @@ void SweepEvidenceConfig::validate() const {
   require(tall_frames >= 1 && tall_frames <= 1000, "tall_frames", "must be in [1, 1000]");
   require(min_passes >= 1 && min_passes <= 1000, "min_passes", "must be in [1, 1000]");
   require(weak_passes >= 1 && weak_passes <= 1000, "weak_passes", "must be in [1, 1000]");
+  require(line_radius >= 0 && line_radius <= 100, "line_radius", "must be in [0, 100] columns");
   require(std::isfinite(forget_sweep) && forget_sweep > pass_gap && forget_sweep <= 100,
           "forget_sweep", "must be in (pass_gap, 100] m");
 }
@@ -76,6 +78,7 @@ struct SweepEvidence::State {
     bool above = false, below = false;  ///< any evidence of the sign
     bool strong = false;                ///< any point of an obstacle group
     int tall = 0;                       ///< tall points
+    int sunk = 0;                       ///< strong points below the floor
     float max_height = 0.0f;            ///< of the strong points [m]
   };
 
@@ -97,6 +100,8 @@ struct SweepEvidence::State {
 
   std::unordered_map<std::uint64_t, Place> places;
   std::unordered_map<std::uint64_t, FrameFlags> frame;  ///< this frame, per column
+  /// Columns with tall_points strong points below the floor, this frame and the last.
+  std::unordered_set<std::uint64_t> sunk, sunk_before;
   std::vector<SweepPass> passes;
 
   /// A pass is consistent when one sign lasts min_frames consecutive frames over min_sweep, with
@@ -111,6 +116,10 @@ struct SweepEvidence::State {
   static void update(Place& place, const FrameFlags& flags, const SweepEvidenceConfig& c,
                      double sweep, std::uint64_t frame);
   SweepVerdict judge(std::uint64_t key, const Place& place, const SweepEvidenceConfig& c) const;
+  /// Whether a column within `radius` of `key` was sunk this frame or the last.
+  bool nearSunk(std::uint64_t key, int radius) const;
+  /// Tall evidence beside strong evidence below the floor is dropped (a dark line's lobes).
+  void dropBesideLines(const SweepEvidenceConfig& c);
   /// A line of weak evidence (a grout line, a board gap) gives the neighbours on both sides along
   /// x or along y weak passes too; a screw a few mm across lies in one or two cells.
   bool onWeakLine(std::uint64_t key) const;
@@ -161,7 +170,9 @@ void SweepEvidence::addEvidence(const std::vector<SweepPoint>& points) {
     f.strong = true;
     if (p.above) f.max_height = std::max(f.max_height, p.height);
     f.tall += p.above && p.tall;
+    f.sunk += !p.above;
   }
+  s.dropBesideLines(config_);
   for (const auto& [key, f] : s.frame) {
     State::Place& place = s.places[key];
     if (place.in_pass && std::abs(sweep_ - place.last) > config_.pass_gap)
@@ -219,6 +230,27 @@ SweepVerdict SweepEvidence::State::judge(std::uint64_t key, const Place& p,
     return SweepVerdict::Above;
   if (p.below_passes + consistent(p.below, p.above, c) >= c.min_passes) return SweepVerdict::Below;
   return SweepVerdict::Pending;
+}
+
+void SweepEvidence::State::dropBesideLines(const SweepEvidenceConfig& c) {
+  sunk_before.swap(sunk);
+  sunk.clear();
+  for (const auto& [key, f] : frame)
+    if (f.sunk >= c.tall_points) sunk.insert(key);
+  if (c.line_radius == 0) return;
+  // A dark line along the slits lifts the stripe on one side as high as an object and sinks the
+  // other: tall evidence beside a line below the floor is the line's other lobe.
+  for (auto& [key, f] : frame)
+    if (f.tall > 0 && nearSunk(key, c.line_radius)) f.tall = 0;
+}
+
+bool SweepEvidence::State::nearSunk(std::uint64_t key, int radius) const {
+  for (int dx = -radius; dx <= radius; ++dx)
+    for (int dy = -radius; dy <= radius; ++dy) {
+      const std::uint64_t near = packColumn(columnX(key) + dx, columnY(key) + dy);
+      if (sunk.count(near) != 0 || sunk_before.count(near) != 0) return true;
+    }
+  return false;
 }
 
 bool SweepEvidence::State::onWeakLine(std::uint64_t key) const {

@@ -59,42 +59,67 @@ Walker::Walker(const WalkerConfig& config, const FootConfig& foot) : config_(con
   foot_.validate();
 }
 
+namespace {
+
+/// `o`'s box on the floor, in the world, for the body at `body`.
+Walker::Box worldBox(const Obstacle& o, const Pose2D& body) {
+  Walker::Box box{Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()),
+                  Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity())};
+  for (const double x : {o.min.x(), o.max.x()})
+    for (const double y : {o.min.y(), o.max.y()}) {
+      const Eigen::Vector2d w = body.toWorld(Eigen::Vector2d(x, y));
+      box.lo = box.lo.cwiseMin(w);
+      box.hi = box.hi.cwiseMax(w);
+    }
+  return box;
+}
+
+bool near(const Walker::Box& a, const Walker::Box& b, double margin) {
+  return (a.lo.array() <= b.hi.array() + margin).all() &&
+         (b.lo.array() <= a.hi.array() + margin).all();
+}
+
+}  // namespace
+
 std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
                                            const Pose2D& body) {
   const double corridor = 0.5 * foot_.foot_separation + 0.5 * foot_.foot_width + config_.margin;
   const double m = config_.known_margin;
+  const auto points = static_cast<std::size_t>(config_.sudden_min_points);
+  // Lines below the floor, this frame and the last: a dark line on the floor along the slits
+  // pulls the stripes beside it below the floor and above it, on neighbouring slits and in
+  // neighbouring frames; an object on the floor lifts its slits only.
+  std::vector<Box> lines;
+  for (const Obstacle& b : obstacles.obstacles)
+    if (b.height < 0 && b.surface.size() >= points) lines.push_back(worldBox(b, body));
+  const auto besideLine = [&](const Box& box) {
+    for (const std::vector<Box>* frame : {&lines, &lines_before_})
+      for (const Box& line : *frame)
+        if (near(box, line, m)) return true;
+    return false;
+  };
   std::vector<Candidate> seen;
   std::optional<Obstacle> sudden;
   for (const Obstacle& o : obstacles.obstacles) {  // nearest first
     if (!(o.distance <= config_.near_distance)) break;
     if (o.max.y() < -corridor || o.min.y() > corridor || o.max.x() < 0) continue;
-    // A texture lobe reaches less high, a stray group holds fewer points.
-    if (!(o.height >= config_.sudden_min_height) ||
-        o.pointCount() < static_cast<std::size_t>(config_.sudden_min_points))
-      continue;
-    // Its box on the floor, in the world.
-    Candidate c{Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()),
-                Eigen::Vector2d::Constant(-std::numeric_limits<double>::infinity()), 1};
-    for (const double x : {o.min.x(), o.max.x()})
-      for (const double y : {o.min.y(), o.max.y()}) {
-        const Eigen::Vector2d w = body.toWorld(Eigen::Vector2d(x, y));
-        c.lo = c.lo.cwiseMin(w);
-        c.hi = c.hi.cwiseMax(w);
-      }
+    // A texture lobe reaches less high; speckle where a stripe is lost makes no surface.
+    if (o.surfacePointsAbove(config_.sudden_min_height) < points) continue;
+    Candidate c{worldBox(o, body), 1};
+    if (besideLine(c.box)) continue;
     // Unknown to the map: no occupied voxel around its box before this frame.
-    if (!map.occupiedInBox(Eigen::Vector3d(c.lo.x() - m, c.lo.y() - m, -1.0),
-                           Eigen::Vector3d(c.hi.x() + m, c.hi.y() + m, 1.0))
+    if (!map.occupiedInBox(Eigen::Vector3d(c.box.lo.x() - m, c.box.lo.y() - m, -1.0),
+                           Eigen::Vector3d(c.box.hi.x() + m, c.box.hi.y() + m, 1.0))
              .empty())
       continue;
     // Seen in the frames before: a candidate of the last frame overlaps it.
     for (const Candidate& before : candidates_)
-      if ((c.lo.array() <= before.hi.array() + m).all() &&
-          (before.lo.array() <= c.hi.array() + m).all())
-        c.frames = std::max(c.frames, before.frames + 1);
+      if (near(c.box, before.box, m)) c.frames = std::max(c.frames, before.frames + 1);
     if (!sudden && c.frames >= config_.sudden_frames) sudden = o;
     seen.push_back(c);
   }
   candidates_ = std::move(seen);
+  lines_before_ = std::move(lines);
   return sudden;
 }
 

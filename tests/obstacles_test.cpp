@@ -225,6 +225,54 @@ TEST(ObstacleClusterer, ScatteredPointsNeitherChainGroupsNorSpreadThem) {
   EXPECT_EQ(r.obstacles[1].pointCount(), 5u);
 }
 
+// Where a stripe is lost on dark grout, the region's maximum is speckle: points tens of pixels
+// off the floor, jumping from row to row. They join the group of a run beside them, but they are
+// no surface, so they do not make it tall (Obstacle::surface).
+TEST(ObstacleClusterer, SpeckleJoinsAGroupButIsNoSurface) {
+  Seen s = look(Scene{}, ClusterMethod::Grid);
+  ASSERT_TRUE(s.floor.found);
+  const int w = static_cast<int>(s.cloud->width), at = w / 3;
+  // dk raised by `dk`, and x, y, z where the extractor puts such a point.
+  const auto lift = [&](int column, float dk) {
+    PointRDM& p = s.cloud->at(column, 7);
+    ASSERT_TRUE(std::isfinite(p.dk)) << column;
+    p.dk += dk;
+    const MetricScale& scale = reference().scale;
+    const double centre = p.u + p.dk;
+    const double depth = scale.disparity_constant /
+                         (centre - reference().slits[7].u_inf[static_cast<std::size_t>(column)]);
+    p.x = static_cast<float>((centre - scale.cx) * depth / scale.f);
+    p.y = static_cast<float>((p.v - scale.cy) * depth / scale.f);
+    p.z = static_cast<float>(depth);
+  };
+  // A run of 6 rows 3 px above the floor (about 8 mm), one row with speckle 40 px above in it,
+  // then speckle on the next rows, 40 px above and 35 px below in turn.
+  for (int k = 0; k < 6; ++k) lift(at + k, k == 3 ? 40.0f : 3.0f);
+  for (int k = 6; k < 9; ++k) lift(at + k, k % 2 == 0 ? 40.0f : -35.0f);
+  s.floor = FloorDetector().detect(s.cloud);
+  const Eigen::Isometry3d pose = geometry().robotFromCamera(MountConfig{});
+  const ObstacleResult r = ObstacleClusterer().cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  const Obstacle& o = r.obstacles[0];
+  EXPECT_EQ(o.pointCount(), 9u);  // the run, the speckle in it and 3 rows after it
+  // The surface: the 5 rows of the run, the speckle in it passed over.
+  ASSERT_EQ(o.surface.size(), 5u);
+  for (const auto i : o.surface)
+    EXPECT_LT(std::abs((*s.cloud)[static_cast<std::size_t>(i)].dk - (*s.cloud)[o.surface[0]].dk),
+              1.0f);
+  ASSERT_EQ(o.surface_heights.size(), 5u);
+  for (const float h : o.surface_heights) EXPECT_NEAR(h, 0.008, 0.004);
+  EXPECT_GT(o.height, 0.05);  // what the speckle reaches
+  EXPECT_EQ(o.surfacePointsAbove(0.025), 0u);
+  EXPECT_EQ(o.surfacePointsAbove(0.004), 5u);
+  // Without the rule every point on one side of the floor in a row is a surface.
+  ObstacleClustererConfig any;
+  any.max_step = 1000;
+  const ObstacleResult all = ObstacleClusterer(any).cluster(s.cloud, s.floor, pose);
+  ASSERT_EQ(all.obstacles.size(), 1u);
+  EXPECT_GT(all.obstacles[0].surfacePointsAbove(0.025), 0u);
+}
+
 TEST(ObstacleClusterer, MetricFloorIsTheFloorUnderTheSensor) {
   const Seen s = look(Scene{}, ClusterMethod::Grid);
   ASSERT_TRUE(s.obstacles.floor.valid);

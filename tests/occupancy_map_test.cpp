@@ -3,6 +3,7 @@
 #include "multislit/occupancy_map.h"
 #include "default_reference.h"
 #include "multislit/sim/walk.h"
+#include "multislit/sweep_evidence.h"
 #include "test_support.h"
 
 #include <octomap/OcTree.h>
@@ -236,6 +237,43 @@ TEST(OccupancyMap, UpdateRateOfFullFrames) {
   EXPECT_GT(stats.free_voxels, 500u);
   std::printf("%zu points per frame: %.0f map updates per second (%zu voxels updated per frame)\n",
               floor.valid_points, 300 / seconds, stats.free_voxels);
+}
+
+// Tall evidence occupies a place after two moving frames, unless a line below the floor lies
+// beside it in this frame or the last (a dark line's lobes on neighbouring slits).
+TEST(SweepEvidence, TallBesideALineBelowTheFloorIsTheLinesOtherLobe) {
+  const auto tall = [](std::int32_t x) {
+    return std::vector<SweepPoint>(3, SweepPoint{x, 0, 0.03f, true, true, true});
+  };
+  const auto below = [](std::int32_t x) {
+    return std::vector<SweepPoint>(3, SweepPoint{x, 0, -0.01f, false, true, false});
+  };
+  const auto walk = [](SweepEvidence& e, const std::vector<SweepPoint>& points) {
+    e.beginFrame(0.002);  // the slits moved 2 mm
+    e.addEvidence(points);
+    return e.verdictAt(0, 0);
+  };
+  std::vector<SweepPoint> with_line = tall(0);
+  for (const SweepPoint& p : below(3)) with_line.push_back(p);
+  SweepEvidence alone, beside, beyond, off;
+  EXPECT_EQ(walk(alone, tall(0)), SweepVerdict::Pending);
+  EXPECT_EQ(walk(alone, tall(0)), SweepVerdict::Above);
+  // The line 3 columns away in the first frame: both frames' tall evidence is dropped.
+  EXPECT_EQ(walk(beside, with_line), SweepVerdict::Pending);
+  EXPECT_EQ(walk(beside, tall(0)), SweepVerdict::Pending);
+  EXPECT_EQ(walk(beside, tall(0)), SweepVerdict::Pending);
+  EXPECT_EQ(walk(beside, tall(0)), SweepVerdict::Above);
+  // 4 columns away: no line beside it.
+  std::vector<SweepPoint> far_line = tall(0);
+  for (const SweepPoint& p : below(4)) far_line.push_back(p);
+  EXPECT_EQ(walk(beyond, far_line), SweepVerdict::Pending);
+  EXPECT_EQ(walk(beyond, tall(0)), SweepVerdict::Above);
+  // Without the rule.
+  SweepEvidenceConfig no_rule;
+  no_rule.line_radius = 0;
+  off = SweepEvidence(no_rule);
+  EXPECT_EQ(walk(off, with_line), SweepVerdict::Pending);
+  EXPECT_EQ(walk(off, tall(0)), SweepVerdict::Above);
 }
 
 TEST(OccupancyMap, FootprintQueryFindsTheCellsUnderASole) {

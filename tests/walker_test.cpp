@@ -232,19 +232,39 @@ TEST(Walker, StopsForASuddenObstacleThenWalks) {
   ball.distance = 0.09 - foot.toe();
   ball.height = 0.04;
   ball.indices.assign(37, 0);  // the points the ball gives where it lands
+  ball.surface.assign(37, 0);
+  ball.surface_heights.assign(37, 0.035f);
   seen.obstacles.push_back(ball);
   // Seen in one frame only: a floor's texture lobe lasts one or two.
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   const std::optional<Obstacle> sudden = walker.findSudden(seen, map, Pose2D{});
   ASSERT_TRUE(sudden);
-  // No higher than a texture lobe reaches: never sudden, however long it is seen.
-  seen.obstacles[0].height = config.sudden_min_height - 0.001;
+  // Its surface no higher than a texture lobe reaches: never sudden, however long it is seen,
+  // even with speckle where a stripe was lost (no surface) reaching any height.
+  seen.obstacles[0].surface_heights.assign(37,
+                                           static_cast<float>(config.sudden_min_height) - 0.001f);
+  seen.obstacles[0].height = 0.12;
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
-  // Fewer points than a ball gives (a stray group): never sudden either.
+  // Fewer tall surface points than a ball gives (a stray run): never sudden either.
   seen.obstacles[0] = ball;
-  seen.obstacles[0].indices.resize(static_cast<std::size_t>(config.sudden_min_points) - 1);
+  seen.obstacles[0].surface_heights.resize(static_cast<std::size_t>(config.sudden_min_points) - 1);
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  // Beside a line below the floor, in this frame or the last (a dark line's lobes): not sudden.
+  Obstacle line = ball;
+  line.min.x() = line.max.x() + 0.01;
+  line.max.x() = line.min.x() + 0.005;
+  line.height = -0.02;
+  line.surface_heights.assign(37, -0.02f);
+  seen.obstacles[0] = ball;
+  seen.obstacles.push_back(line);
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
+  seen.obstacles.pop_back();
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));  // the line was there a frame ago
+  EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));  // seen once since: one frame
+  ASSERT_TRUE(walker.findSudden(seen, map, Pose2D{}));
+  seen.obstacles[0].surface_heights.clear();  // a frame without it
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));
   seen.obstacles[0] = ball;
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));  // the run starts again

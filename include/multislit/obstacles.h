@@ -59,6 +59,12 @@ struct ObstacleClustererConfig {
   /// 0.892, 5 hops 1.48 % and 0.892; chaining through any number of points in no run gave 1.49 %
   /// and 0.892. With min_run 1 every point is in a run.
   int max_hops = 2;
+  /// An obstacle's surface (Obstacle::surface): runs of min_run points of one slit whose dk
+  /// changes by at most this much from one point to the next. A surface changes dk by at most
+  /// 3.5 px from one image row to the next (the simulator's truth on the ball, the box and the
+  /// tennis ball); where a stripe is lost on dark grout, the row's profile finds speckle anywhere
+  /// in the assigned region, tens of pixels apart on neighbouring rows.
+  double max_step = 8.0;  ///< [px]
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -76,6 +82,14 @@ struct Obstacle {
   double distance = 0.0;      ///< nearest point to the feet (FootConfig::toe, halfWidth) [m]
   double max_residual = 0.0;  ///< largest |dk - plane| of its points [px]
   int slits = 0;              ///< slits it lies on [-]
+  /// Its points on a surface (ObstacleClustererConfig::max_step), in ascending order, and their
+  /// heights above the floor [m] (where they have x, y, z). Only these tell how tall it is for
+  /// the walker's sudden stop and the map's tall evidence: points where a stripe was lost join
+  /// groups and reach any height.
+  pcl::Indices surface;
+  std::vector<float> surface_heights;
+  /// Surface points at least `least` [m] above the floor.
+  std::size_t surfacePointsAbove(double least) const;
   std::size_t pointCount() const { return indices.size(); }
 };
 

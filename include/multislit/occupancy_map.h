@@ -46,11 +46,11 @@ class SlitSweep;
 /// In frames, with the defaults and the paper's gait (1.7 mm of sweep a frame): a place is occupied
 /// when two slits one after the other each gave it 3 consecutive frames of one sign over 3 mm of
 /// sweep (an object on the floor: a 7 mm cable is occupied 28 to 113 frames after the slits first
-/// reach it, by floor), or 2 consecutive moving frames with 3 points higher than 25 mm in the
-/// column (a ball), or 6 passes of weak evidence above the floor (a screw); a robot that stands
-/// occupies nothing; a hit saturates the voxel (prob_hit 0.85: +1.73 in
-/// log-odds against a threshold of +1.10), and 48 frames of clear floor free it again (prob_miss
-/// -0.05 each, from clamp_max 0.97 down to the threshold).
+/// reach it, by floor), or 2 consecutive moving frames with 3 surface points (Obstacle::surface)
+/// higher than 25 mm in the column and no line below the floor beside it (a ball), or 6 passes of
+/// weak evidence above the floor (a screw); a robot that stands occupies nothing; a hit saturates
+/// the voxel (prob_hit 0.85: +1.73 in log-odds against a threshold of +1.10), and 48 frames of
+/// clear floor free it again (prob_miss -0.05 each, from clamp_max 0.97 down to the threshold).
 ///
 /// Free space is discretized: one light ray per slit and floor voxel, cast from the floor up to
 /// free_height only (not to the sensor), which is where an object on the floor can be. Cells the

@@ -36,6 +36,12 @@ struct SweepEvidenceConfig {
   double tall_height = 0.025;  ///< [m]
   int tall_points = 3;  ///< ... of at least this many tall points in the column in a frame [-]
   int tall_frames = 2;  ///< [-]
+  /// ... and not within this many columns of a column that held tall_points points of an
+  /// obstacle group below the floor, in this frame or the last: a dark line along the slits pulls
+  /// the stripes beside it below the floor and above it, on neighbouring slits and in
+  /// neighbouring frames, as high as an object; an object lifts its slits only [columns]. 0: no
+  /// such rule.
+  int line_radius = 3;
   /// Consistent passes in a row, i.e. slits one after the other, that occupy a place [-]
   int min_passes = 2;
   /// Passes in a row with only weak evidence (below the obstacle threshold), above the floor and

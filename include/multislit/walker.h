@@ -37,10 +37,11 @@ struct WalkerConfig {
   /// An obstacle is known (not sudden) when the map held occupied voxels this close to it before
   /// the frame.
   double known_margin = 0.03;  ///< [m]
-  /// Only an obstacle this high above the floor stops the robot: higher than the lobes a floor's
-  /// texture makes in one frame (docs/walk.md).
+  /// Only an obstacle with sudden_min_points points on its surface (Obstacle::surface) this high
+  /// above the floor stops the robot: higher than the lobes a floor's texture makes in one frame
+  /// (docs/walk.md), ...
   double sudden_min_height = 0.025;  ///< [m]
-  /// ... holding at least this many points (a lobe or a stray group holds few) [-]
+  /// ... and more of them than a stray run holds [-]
   int sudden_min_points = 10;
   /// ... seen in this many consecutive frames (a lobe lasts one or two), in places that overlap
   /// within known_margin.
@@ -78,13 +79,18 @@ struct WalkerResult {
 
 class Walker {
  public:
+  /// A box on the floor, in the world [m].
+  struct Box {
+    Eigen::Vector2d lo, hi;
+  };
+
   Walker(const WalkerConfig& config, const FootConfig& foot);  ///< validates both
 
   const WalkerConfig& config() const { return config_; }
 
   /// The nearest obstacle of this frame that appeared suddenly very near the feet of the body at
-  /// `body`: near, in front of the soles, above the floor by sudden_min_height, unknown to the map
-  /// before it learns this frame, and seen so in sudden_frames consecutive frames (call once a
+  /// `body`: near, in front of the soles, tall on its surface (sudden_min_height), unknown to the
+  /// map before it learns this frame, and seen so in sudden_frames consecutive frames (call once a
   /// frame: it remembers the frame's candidates).
   std::optional<Obstacle> findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
                                      const Pose2D& body);
@@ -102,15 +108,16 @@ class Walker {
   /// A candidate sudden obstacle of the last frame: its box on the floor (world) and the frames in
   /// a row it was seen.
   struct Candidate {
-    Eigen::Vector2d lo, hi;
+    Box box;
     int frames = 0;
   };
 
   WalkerConfig config_;
   FootConfig foot_;
   std::vector<Candidate> candidates_;
-  int stop_left_ = 0;  ///< frames of the current stop still to come
-  int turning_ = 0;    ///< side of the turn under way, 0 when not turning
+  std::vector<Box> lines_before_;  ///< the last frame's lines below the floor (findSudden)
+  int stop_left_ = 0;              ///< frames of the current stop still to come
+  int turning_ = 0;                ///< side of the turn under way, 0 when not turning
 };
 
 }  // namespace multislit
