@@ -165,8 +165,8 @@ TEST(PlaneEstimators, EveryPclEstimatorFindsTheTableIFloorsAndRansacsInliers) {
 }
 
 // MLESAC's scale is the model's: sigma = threshold / 2 [px], so its inliers (within 2 sigma) are
-// exactly the points within the threshold of its plane. PCL's own scale (the threshold times the
-// spread of x, y, z in metres) would make them those within about 0.1 px here.
+// exactly the points within the threshold of its plane. With PCL's own scale (the threshold times
+// the spread of x, y, z in metres) they are not.
 TEST(PlaneEstimators, MlesacInliersAreThePointsWithinTheThreshold) {
   const TableIFrame frame = renderTableIFrame(3);
   const auto model = std::make_shared<Model>(frame.cloud);
