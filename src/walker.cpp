@@ -61,7 +61,7 @@ Walker::Walker(const WalkerConfig& config, const FootConfig& foot) : config_(con
 
 std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
                                            const Pose2D& body) {
-  const double corridor = 0.5 * foot_.foot_separation + 0.5 * foot_.foot_width + config_.margin;
+  const double corridor = foot_.halfWidth() + config_.margin;
   const double m = config_.known_margin;
   std::vector<Candidate> seen;
   std::optional<Obstacle> sudden;
