@@ -25,8 +25,10 @@ struct NodeConfig {
   /// processed.
   bool realtime = true;
 
-  std::string odom_frame = "odom";                 ///< the map's and the odometry's frame
-  std::string base_frame = "base_link";            ///< the robot on the floor between its feet
+  std::string odom_frame = "odom";  ///< the map's and the odometry's frame
+  /// The robot on the floor midway between its feet, x forward, z up: REP 120's base_footprint
+  /// (base_link is the torso, the robot's to publish).
+  std::string base_frame = "base_footprint";
   std::string camera_frame = "multislit_optical";  ///< x right, y down, z forward
   /// Publish base_frame -> camera_frame (static) from the sensor's mount; false when the robot's
   /// own description already does.

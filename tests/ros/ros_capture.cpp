@@ -70,7 +70,7 @@ void Capture::playRobot() {
       geometry_msgs::TransformStamped t;
       t.header.stamp = ros::Time::now();
       t.header.frame_id = "odom";
-      t.child_frame_id = "base_link";
+      t.child_frame_id = "base_footprint";
       t.transform.translation.x = p.x();
       t.transform.translation.y = p.y();
       t.transform.translation.z = p.z();
@@ -80,7 +80,7 @@ void Capture::playRobot() {
       nav_msgs::Odometry m;
       m.header.stamp = ros::Time::now();
       m.header.frame_id = "odom";
-      m.child_frame_id = "base_link";
+      m.child_frame_id = "base_footprint";
       m.pose.pose.position.x = p.x();
       m.pose.pose.position.y = p.y();
       m.pose.pose.position.z = p.z();

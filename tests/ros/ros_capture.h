@@ -1,6 +1,6 @@
 // What the ROS node test (ros_node_test.cpp) receives from multislit_ros: every message of the
 // node's topics with its time of receipt and the MD5 its publisher announced, while it plays the
-// robot that the node asks for poses (odom -> base_link on TF, or nav_msgs/Odometry).
+// robot that the node asks for poses (odom -> base_footprint on TF, or nav_msgs/Odometry).
 #pragma once
 
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -39,7 +39,8 @@ struct Inbox {
 struct CaptureOptions {
   std::string ns = "/multislit";  ///< the node's namespace
   std::size_t frames = 0;         ///< the frames the node processes
-  /// "tf": publish odom -> base_link; "odom": publish nav_msgs/Odometry on /odom; else nothing.
+  /// "tf": publish odom -> base_footprint; "odom": publish nav_msgs/Odometry on /odom; else
+  /// nothing.
   std::string poses = "tf";
   Eigen::Isometry3d robot = Eigen::Isometry3d::Identity();  ///< the robot in odom, standing
   double timeout = 120.0;                                   ///< for all of the node's messages [s]

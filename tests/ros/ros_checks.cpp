@@ -208,7 +208,8 @@ std::vector<Eigen::Vector3d> occupiedCentres(const octomap::OcTree& tree) {
 std::optional<Eigen::Isometry3d> baseFromCamera() {
   for (const auto& item : capture().tf_static.items)
     for (const geometry_msgs::TransformStamped& t : item.message->transforms) {
-      if (t.header.frame_id != "base_link" || t.child_frame_id != "multislit_optical") continue;
+      if (t.header.frame_id != "base_footprint" || t.child_frame_id != "multislit_optical")
+        continue;
       const auto& q = t.transform.rotation;
       Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
       pose.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).toRotationMatrix();
@@ -229,7 +230,7 @@ void writeFigure(const std::string& path) {
   const std::size_t groups = groupBoxes(markers).size();
   char title[200];
   std::snprintf(title, sizeof title,
-                "multislit_ros on the simulator (%s), frame %zu, fixed frame base_link:\n"
+                "multislit_ros on the simulator (%s), frame %zu, fixed frame base_footprint:\n"
                 "/multislit/rdmap (points) and /multislit/obstacle_markers (%zu groups)",
                 g_options.scenario.c_str(), capture().rdmap.items.size() - 1, groups);
   const cv::Mat image = renderView(rdmapCloud(cloud), markers,

@@ -68,7 +68,7 @@ std::unique_ptr<octomap::OcTree> decodeOctomap(const octomap_msgs::Octomap& mess
 /// The centres of the occupied leaves, sorted.
 std::vector<Eigen::Vector3d> occupiedCentres(const octomap::OcTree& tree);
 
-/// base_link -> multislit_optical from /tf_static.
+/// base_footprint -> multislit_optical from /tf_static.
 std::optional<Eigen::Isometry3d> baseFromCamera();
 /// The last frame's cloud and boxes as a viewer shows them (ros_view.h).
 void writeFigure(const std::string& path);

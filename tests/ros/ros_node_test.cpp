@@ -111,7 +111,7 @@ TEST(RosNode, PublishesOneBoxPerObstacleGroupWithItsSize) {
     for (const pcl::PointXYZL& p : labelledCloud(*clouds[i].message)) labels.insert(p.label);
     EXPECT_EQ(boxes.size(), labels.size()) << "frame " << i;
     for (const auto& box : boxes) {
-      EXPECT_EQ(box.header.frame_id, "base_link");
+      EXPECT_EQ(box.header.frame_id, "base_footprint");
       EXPECT_GT(box.scale.x, 0.0);
       EXPECT_GT(box.scale.y, 0.0);
       EXPECT_GT(box.scale.z, 0.0);
