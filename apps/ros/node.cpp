@@ -14,9 +14,10 @@
 namespace multislit::ros_node {
 namespace {
 
-PipelineConfig pipelineConfig(const apps::MapInput& in) {
+PipelineConfig pipelineConfig(const apps::MapInput& in, const NodeConfig& node) {
   PipelineConfig config;
   config.sensor = in.sensor;
+  config.map = node.map;
   return config;
 }
 
@@ -39,7 +40,7 @@ std::string str(const T& value) {
 Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : config_(config),
       in_(apps::openMapInput(config.input)),
-      pipeline_(pipelineConfig(in_)),
+      pipeline_(pipelineConfig(in_, config)),
       extractor_(in_.reference),
       poses_(config_, in_, pipeline_.config(), nh) {
   if (!config_.out.empty()) recorder_.emplace(config_.out);

@@ -77,6 +77,8 @@ bool parseOptions(int argc, char** argv) {
         g_options.figure = value;
       else if (key == "--fps")
         g_options.fps = std::stod(value);
+      else if (key == "--resolution")
+        g_options.resolution = std::stod(value);
       else if (key == "--timeout")
         g_options.timeout = std::stod(value);
       else

@@ -4,6 +4,7 @@
 
 #include "ros_capture.h"
 
+#include "multislit/occupancy_map.h"
 #include "multislit/point_types.h"
 #include "multislit/sim/scenarios.h"
 
@@ -28,13 +29,14 @@ struct TestOptions {
   Eigen::Isometry3d robot = Eigen::Isometry3d::Identity();  ///< where the odometry says it is
   std::string node_out;                                     ///< the node's ~out folder
   std::string map_out;                                      ///< `multislit map` on the same frames
-  std::string figure;      ///< a PNG of the last frame as a viewer shows it
-  double fps = 30.0;       ///< the node's ~fps [Hz]
-  double timeout = 120.0;  ///< for the whole run [s]
+  std::string figure;  ///< a PNG of the last frame as a viewer shows it
+  double fps = 30.0;   ///< the node's ~fps [Hz]
+  double resolution = OccupancyMapConfig{}.resolution;  ///< the node's ~resolution [m]
+  double timeout = 120.0;                               ///< for the whole run [s]
 };
 
 /// Reads --scenario, --frames, --poses, --robot X,Y,YAW_DEG, --node-out, --map-out, --figure,
-/// --fps and --timeout; false (said on stderr) when they are wrong.
+/// --fps, --resolution and --timeout; false (said on stderr) when they are wrong.
 bool parseOptions(int argc, char** argv);
 const TestOptions& options();
 CaptureOptions captureOptions();

@@ -116,10 +116,19 @@ checked_run ball --scenario ball --frames 30 --poses tf --node-out "$work/node_b
 stop $bag
 
 # 3. The program alone, odometry poses, the picture.
-checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 \
+checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
   --figure "$work/ros_view.png" -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 \
-  _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1
+  _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 \
+  _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 _sensor_model/min:=0.1 _sensor_model/max:=0.95 \
+  _pointcloud_max_z:=0.25
 [[ -s $work/ros_view.png ]] || fail "no picture"
+grep -q "unknown parameter" "$work/fig8_node.log" &&
+  fail "fig8: octomap_server's parameters were not known: $(grep "unknown parameter" "$work/fig8_node.log")"
+# octomap_server's parameters are checked by OccupancyMapConfig::validate(), named.
+"$package/multislit_ros" _simulate:=fig8 _sensor_model/hit:=0.3 >"$work/bad_param.log" 2>&1 &&
+  fail "~sensor_model/hit 0.3 was taken"
+grep -q "~sensor_model/hit: OccupancyMapConfig.prob_hit must be in (0.5, 1)" "$work/bad_param.log" ||
+  fail "~sensor_model/hit 0.3: $(tail -3 "$work/bad_param.log")"
 
 # 4. The bag.
 rosbag info "$work/run.bag" >"$work/bag_info.txt" 2>&1 || fail "rosbag info: $(cat "$work/bag_info.txt")"

@@ -148,7 +148,7 @@ TEST(RosNode, PublishesTheOctomapWithUpstreamsChecksum) {
     EXPECT_EQ(item.md5, kOctomapMd5);  // what the node's connection announced
     EXPECT_TRUE(item.message->binary);
     EXPECT_EQ(item.message->id, "OcTree");
-    EXPECT_DOUBLE_EQ(item.message->resolution, 0.01);
+    EXPECT_DOUBLE_EQ(item.message->resolution, options().resolution);  // ~resolution
     EXPECT_EQ(item.message->header.frame_id, "odom");
   }
 }
