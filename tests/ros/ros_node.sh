@@ -141,4 +141,17 @@ done
 grep -q "/multislit/rdmap  *30 msgs" "$work/bag_info.txt" || fail "the bag has not the 30 clouds"
 grep -q "octomap_msgs/Octomap  *\[9a45536b45c5e409cd49f04bb2d9999f\]" "$work/bag_info.txt" ||
   fail "the bag's octomap_msgs/Octomap is not upstream's"
+# 5. The package's rviz view shows only topics the node published (the bag holds them).
+/usr/bin/python3 - "$package/rviz/multislit.rviz" "$work/bag_info.txt" <<'EOF' || fail "rviz/multislit.rviz"
+import sys, yaml
+config = yaml.safe_load(open(sys.argv[1]))
+manager = config["Visualization Manager"]
+assert manager["Global Options"]["Fixed Frame"] == "base_footprint", "fixed frame"
+topics = [d.get("Topic") or d.get("Marker Topic") for d in manager["Displays"]]
+topics = [t for t in topics if t]
+recorded = open(sys.argv[2]).read().split()
+missing = [t for t in topics if t not in recorded]
+assert len(topics) == 4 and not missing, f"topics {topics}, not published: {missing}"
+print(f"rviz/multislit.rviz: fixed frame base_footprint, {len(topics)} topics, all published")
+EOF
 echo "ros_node: all checks passed in $(since "$t_start")"
