@@ -45,12 +45,14 @@ Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
       poses_(config_, in_, pipeline_.config(), nh) {
   if (!config_.out.empty()) recorder_.emplace(config_.out);
   rdmap_ = pnh.advertise<sensor_msgs::PointCloud2>("rdmap", 5);
-  floor_ = pnh.advertise<multislit_ros::Floor>("floor", 10);
+  // The floor and the decision are latched as the map is: who subscribes late (a controller,
+  // rostopic echo) gets the last frame's at once.
+  floor_ = pnh.advertise<multislit_ros::Floor>("floor", 10, true);
   obstacles_ = pnh.advertise<sensor_msgs::PointCloud2>("obstacles", 5);
   markers_ = pnh.advertise<visualization_msgs::MarkerArray>("obstacle_markers", 5);
   octomap_ = pnh.advertise<octomap_msgs::Octomap>("octomap_binary", 1, true);  // latched
   occupied_ = pnh.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, true);
-  decision_ = pnh.advertise<multislit_ros::Decision>("decision", 10);
+  decision_ = pnh.advertise<multislit_ros::Decision>("decision", 10, true);
   diagnostics_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   if (config_.publish_mount_tf)  // the sensor file's mount: base_frame -> camera_frame
     static_tf_.sendTransform(transformMessage(pipeline_.geometry().robotFromCamera(),

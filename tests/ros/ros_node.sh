@@ -91,6 +91,7 @@ checked_run() {
   rc=$?
   cat "$work/${name}_check.log"
   ((rc == 0)) || fail "ros_node_test on $name (rc $rc); the node said: $(tail -20 "$work/${name}_node.log")"
+  [[ -z ${after_check:-} ]] || $after_check
   # Shut down (Ctrl-C), the node ends cleanly: rc 0 and, under ASan, no leak.
   stop $node
   rc=$?
@@ -115,8 +116,27 @@ checked_run ball --scenario ball --frames 30 --poses tf --node-out "$work/node_b
   poses:=tf pose_timeout:=1.0 out:="$work/node_ball" wait_for_subscribers:=2
 stop $bag
 
+# rospy reads the node's messages (genpy's modules in the package's python/): rostopic echo prints
+# the latched floor and decision of the last frame.
+echo_messages() {
+  local topic
+  for topic in floor decision; do
+    PYTHONPATH=$package/python${PYTHONPATH:+:$PYTHONPATH} timeout 120 rostopic echo -n 1 \
+      "/multislit/$topic" >"$work/echo_$topic.txt" 2>&1 ||
+      fail "rostopic echo /multislit/$topic: $(tail -3 "$work/echo_$topic.txt")"
+  done
+  grep -q '^  frame_id: "multislit_optical"' "$work/echo_floor.txt" &&
+    grep -q "^found: True" "$work/echo_floor.txt" &&
+    grep -q "^valid_points: [1-9]" "$work/echo_floor.txt" ||
+    fail "rostopic echo /multislit/floor: $(cat "$work/echo_floor.txt")"
+  grep -q '^  frame_id: "base_footprint"' "$work/echo_decision.txt" &&
+    grep -qE '^command_name: "(walk|turn|stop)"' "$work/echo_decision.txt" ||
+    fail "rostopic echo /multislit/decision: $(cat "$work/echo_decision.txt")"
+  echo "rostopic echo: the floor and the decision of the last frame"
+}
+
 # 3. The program alone, odometry poses, the picture.
-checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
+after_check=echo_messages checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
   --figure "$work/ros_view.png" -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 \
   _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 \
   _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 _sensor_model/min:=0.1 _sensor_model/max:=0.95 \
