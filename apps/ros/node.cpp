@@ -51,6 +51,8 @@ Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
   obstacles_ = pnh.advertise<sensor_msgs::PointCloud2>("obstacles", 5);
   markers_ = pnh.advertise<visualization_msgs::MarkerArray>("obstacle_markers", 5);
   octomap_ = pnh.advertise<octomap_msgs::Octomap>("octomap_binary", 1, true);  // latched
+  octomap_full_ = pnh.advertise<octomap_msgs::Octomap>("octomap_full", 1, true);
+  projected_ = pnh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, true);
   occupied_ = pnh.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, true);
   decision_ = pnh.advertise<multislit_ros::Decision>("decision", 10, true);
   diagnostics_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
@@ -73,7 +75,8 @@ std_msgs::Header Node::header(const ros::Time& stamp, const std::string& frame) 
 void Node::waitForSubscribers() const {
   if (config_.wait_for_subscribers == 0) return;
   const std::vector<const ros::Publisher*> topics = {
-      &rdmap_, &floor_, &obstacles_, &markers_, &octomap_, &occupied_, &decision_, &diagnostics_};
+      &rdmap_,        &floor_,     &obstacles_, &markers_,  &octomap_,
+      &octomap_full_, &projected_, &occupied_,  &decision_, &diagnostics_};
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(config_.wait_timeout);
   const auto missing = [&] {
     std::string names;
@@ -191,6 +194,8 @@ void Node::publishFrame(const Frame& frame, const pcl::PointCloud<PointRDM>& clo
 void Node::publishMap(const ros::Time& stamp) {
   const std_msgs::Header odom = header(stamp, config_.odom_frame);
   octomap_.publish(octomapMessage(pipeline_.map().tree(), odom));
+  octomap_full_.publish(octomapFullMessage(pipeline_.map().tree(), odom));
+  projected_.publish(projectedMapMessage(pipeline_.map().tree(), odom));
   occupied_.publish(occupiedCellsMessage(pipeline_.map().tree(), odom));
   map_published_at_ = counts_.processed;
 }

@@ -23,6 +23,8 @@ Capture::Capture(const CaptureOptions& options) : options_(options), spinner_(1,
   listen(floor, ns + "/floor");
   listen(markers, ns + "/obstacle_markers");
   listen(octomap, ns + "/octomap_binary");
+  listen(octomap_full, ns + "/octomap_full");
+  listen(projected, ns + "/projected_map");
   listen(decision, ns + "/decision");
   listen(diagnostics, "/diagnostics");
   listen(tf_static, "/tf_static");
@@ -104,10 +106,11 @@ std::string Capture::missing() const {
   need(decision.topic, decision.items.size(), n);
   need(tf_static.topic, tf_static.items.size(), 1);
   // The map of the last frame, and the diagnostics said after it.
-  const bool last_map =
-      !rdmap.items.empty() && !octomap.items.empty() && !occupied.items.empty() &&
-      octomap.items.back().message->header.stamp == rdmap.items.back().message->header.stamp &&
-      occupied.items.back().message->header.stamp == rdmap.items.back().message->header.stamp;
+  const auto last = [&](const auto& inbox) {
+    return !rdmap.items.empty() && !inbox.items.empty() &&
+           inbox.items.back().message->header.stamp == rdmap.items.back().message->header.stamp;
+  };
+  const bool last_map = last(octomap) && last(octomap_full) && last(projected) && last(occupied);
   if (!last_map) what += " the map of the last frame;";
   bool finished = false;
   for (const auto& d : diagnostics.items)

@@ -6,6 +6,7 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <multislit_ros/Decision.h>
 #include <multislit_ros/Floor.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <octomap_msgs/Octomap.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
@@ -58,7 +59,8 @@ class Capture {
   Inbox<sensor_msgs::PointCloud2> rdmap, obstacles, occupied;
   Inbox<multislit_ros::Floor> floor;
   Inbox<visualization_msgs::MarkerArray> markers;
-  Inbox<octomap_msgs::Octomap> octomap;
+  Inbox<octomap_msgs::Octomap> octomap, octomap_full;
+  Inbox<nav_msgs::OccupancyGrid> projected;
   Inbox<multislit_ros::Decision> decision;
   Inbox<diagnostic_msgs::DiagnosticArray> diagnostics;
   Inbox<tf2_msgs::TFMessage> tf_static;

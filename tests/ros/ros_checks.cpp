@@ -190,7 +190,10 @@ const SceneObject* objectUnder(const Scenario& scenario, const Eigen::Isometry3d
 std::unique_ptr<octomap::OcTree> decodeOctomap(const octomap_msgs::Octomap& message) {
   auto tree = std::make_unique<octomap::OcTree>(message.resolution);
   std::stringstream data(std::string(message.data.begin(), message.data.end()));
-  tree->readBinaryData(data);
+  if (message.binary)
+    tree->readBinaryData(data);
+  else
+    tree->readData(data);
   return tree;
 }
 

@@ -65,7 +65,8 @@ std::vector<visualization_msgs::Marker> groupBoxes(const visualization_msgs::Mar
 const SceneObject* objectUnder(const Scenario& scenario, const Eigen::Isometry3d& world_from_frame,
                                const Eigen::Vector3d& p, double margin);
 
-/// octomap_msgs' binary map read back as octomap_msgs' conversions do (readBinaryData).
+/// octomap_msgs' map read back as octomap_msgs' conversions do (readBinaryData, or readData for a
+/// full map).
 std::unique_ptr<octomap::OcTree> decodeOctomap(const octomap_msgs::Octomap& message);
 /// The centres of the occupied leaves, sorted.
 std::vector<Eigen::Vector3d> occupiedCentres(const octomap::OcTree& tree);

@@ -106,8 +106,8 @@ checked_run() {
 
 # 2. The launch file, TF poses, a bag.
 topics=(/multislit/rdmap /multislit/floor /multislit/obstacles /multislit/obstacle_markers
-  /multislit/octomap_binary /multislit/octomap_point_cloud_centers /multislit/decision
-  /diagnostics /tf /tf_static)
+  /multislit/octomap_binary /multislit/octomap_full /multislit/projected_map
+  /multislit/octomap_point_cloud_centers /multislit/decision /diagnostics /tf /tf_static)
 rosbag record -O "$work/run.bag" "${topics[@]}" >"$work/rosbag.log" 2>&1 &
 bag=$!
 pids+=($bag)

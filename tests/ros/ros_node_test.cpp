@@ -176,6 +176,66 @@ TEST(RosNode, MapDecodesIntoTheOccupiedVoxelsOfItsCloud) {
   // over the sweep"); the decoding is compared on whatever the maps hold.
 }
 
+// octomap_full: every voxel's occupancy; the binary map is its maximum likelihood.
+TEST(RosNode, FullMapIsTheBinaryMapWithItsProbabilities) {
+  const auto& full = capture().octomap_full.items;
+  const auto& binary = capture().octomap.items;
+  ASSERT_EQ(full.size(), binary.size());
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    EXPECT_EQ(full[i].md5, kOctomapMd5);
+    EXPECT_FALSE(full[i].message->binary);
+    EXPECT_EQ(full[i].message->id, "OcTree");
+    EXPECT_DOUBLE_EQ(full[i].message->resolution, options().resolution);
+    EXPECT_EQ(full[i].message->header.stamp, binary[i].message->header.stamp);
+    const auto tree = decodeOctomap(*full[i].message);
+    const auto likely = decodeOctomap(*binary[i].message);
+    EXPECT_EQ(tree->size() > 0, likely->size() > 0) << "map " << i;
+    std::size_t leaves = 0;
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it, ++leaves) {
+      const octomap::OcTreeNode* node = likely->search(it.getCoordinate());
+      ASSERT_NE(node, nullptr) << "map " << i << ": a voxel only the full map knows";
+      EXPECT_EQ(tree->isNodeOccupied(*it), likely->isNodeOccupied(node)) << "map " << i;
+      EXPECT_GT(it->getOccupancy(), 0.0);
+      EXPECT_LT(it->getOccupancy(), 1.0);
+    }
+    EXPECT_EQ(occupiedCentres(*tree), occupiedCentres(*likely)) << "map " << i;
+  }
+}
+
+// projected_map: each column of the last map seen from above, looked up voxel by voxel.
+TEST(RosNode, ProjectedMapIsTheLastMapSeenFromAbove) {
+  ASSERT_FALSE(capture().projected.items.empty());
+  const nav_msgs::OccupancyGrid& grid = *capture().projected.items.back().message;
+  const auto tree = decodeOctomap(*capture().octomap_full.items.back().message);
+  EXPECT_EQ(grid.header.frame_id, "odom");
+  EXPECT_FLOAT_EQ(grid.info.resolution, static_cast<float>(options().resolution));
+  ASSERT_EQ(grid.data.size(), std::size_t{grid.info.width} * grid.info.height);
+  ASSERT_EQ(tree->size() > 0, !grid.data.empty());
+  if (grid.data.empty()) return;
+  double x0, y0, z0, x1, y1, z1;
+  tree->getMetricMin(x0, y0, z0);
+  tree->getMetricMax(x1, y1, z1);
+  const double res = grid.info.resolution;
+  std::size_t known = 0;
+  for (std::uint32_t row = 0; row < grid.info.height; ++row)
+    for (std::uint32_t col = 0; col < grid.info.width; ++col) {
+      const double x = grid.info.origin.position.x + (col + 0.5) * res;
+      const double y = grid.info.origin.position.y + (row + 0.5) * res;
+      int expected = -1;
+      for (double z = z0 + res / 2; z < z1; z += res)
+        if (const octomap::OcTreeNode* node = tree->search(x, y, z))
+          expected = std::max(expected, tree->isNodeOccupied(node) ? 100 : 0);
+      EXPECT_EQ(grid.data[std::size_t{row} * grid.info.width + col], expected)
+          << "cell " << col << ", " << row;
+      known += expected >= 0;
+    }
+  EXPECT_GT(known, 0u);
+  EXPECT_NEAR(grid.info.origin.position.x, x0, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.y, y0, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.x + grid.info.width * res, x1, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.y + grid.info.height * res, y1, res / 2);
+}
+
 TEST(RosNode, MapOfAStandingRobotHoldsNothingWhereverTheOdometryPutsIt) {
   const Scenario scenario = makeScenario(options().scenario);
   const auto tree = decodeOctomap(*capture().octomap.items.back().message);
