@@ -235,6 +235,7 @@ void Node::publishDiagnostics(bool now, const std::string& state) {
       entry("sigma [px]", str(counts_.last_sigma)),
       entry("obstacle groups", str(counts_.last_groups)),
       entry("decision", counts_.last_decision),
+      entry("camera mount", poses_.mountSource()),
       entry("occupied voxels", str(pipeline_.map().occupiedCount())),
       entry("mean latency, stamp to cloud published [ms]", str(1e3 * counts_.latency_sum / n)),
       entry("mean latency, frame arrival to cloud published [ms]",

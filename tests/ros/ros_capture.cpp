@@ -1,6 +1,7 @@
 #include "ros_capture.h"
 
 #include <nav_msgs/Odometry.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <chrono>
@@ -57,6 +58,22 @@ void Capture::listen(Inbox<M>& inbox, const std::string& topic) {
 /// The robot standing at options_.robot, 100 times a second, on the node's clock (now).
 void Capture::playRobot() {
   tf2_ros::TransformBroadcaster tf;
+  tf2_ros::StaticTransformBroadcaster static_tf;
+  if (options_.mount) {
+    const Eigen::Quaterniond r(options_.mount->rotation());
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = "base_footprint";
+    t.child_frame_id = "multislit_optical";
+    t.transform.translation.x = options_.mount->translation().x();
+    t.transform.translation.y = options_.mount->translation().y();
+    t.transform.translation.z = options_.mount->translation().z();
+    t.transform.rotation.x = r.x();
+    t.transform.rotation.y = r.y();
+    t.transform.rotation.z = r.z();
+    t.transform.rotation.w = r.w();
+    static_tf.sendTransform(t);
+  }
   ros::Publisher odometry;
   if (options_.poses == "odom") odometry = nh_.advertise<nav_msgs::Odometry>("/odom", 100);
   const Eigen::Vector3d p = options_.robot.translation();

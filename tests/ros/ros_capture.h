@@ -19,6 +19,7 @@
 #include <atomic>
 #include <cstddef>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -44,7 +45,9 @@ struct CaptureOptions {
   /// nothing.
   std::string poses = "tf";
   Eigen::Isometry3d robot = Eigen::Isometry3d::Identity();  ///< the robot in odom, standing
-  double timeout = 120.0;                                   ///< for all of the node's messages [s]
+  /// The camera mount the robot publishes on /tf_static (base_footprint -> multislit_optical).
+  std::optional<Eigen::Isometry3d> mount;
+  double timeout = 120.0;  ///< for all of the node's messages [s]
 };
 
 class Capture {

@@ -79,6 +79,8 @@ bool parseOptions(int argc, char** argv) {
         g_options.fps = std::stod(value);
       else if (key == "--resolution")
         g_options.resolution = std::stod(value);
+      else if (key == "--mount-shift")
+        g_options.mount_shift = std::stod(value);
       else if (key == "--timeout")
         g_options.timeout = std::stod(value);
       else
@@ -100,6 +102,8 @@ CaptureOptions captureOptions() {
   c.poses = g_options.poses;
   c.robot = g_options.robot;
   c.timeout = g_options.timeout;
+  if (g_options.mount_shift != 0.0)
+    c.mount = Eigen::Translation3d(g_options.mount_shift, 0.0, 0.0) * expected().base_from_camera;
   return c;
 }
 

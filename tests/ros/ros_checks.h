@@ -32,11 +32,14 @@ struct TestOptions {
   std::string figure;  ///< a PNG of the last frame as a viewer shows it
   double fps = 30.0;   ///< the node's ~fps [Hz]
   double resolution = OccupancyMapConfig{}.resolution;  ///< the node's ~resolution [m]
-  double timeout = 120.0;                               ///< for the whole run [s]
+  /// Not 0: the robot publishes the camera mount on TF (the node's ~publish_mount_tf false), the
+  /// sensor's with the camera this much further forward [m].
+  double mount_shift = 0.0;
+  double timeout = 120.0;  ///< for the whole run [s]
 };
 
 /// Reads --scenario, --frames, --poses, --robot X,Y,YAW_DEG, --node-out, --map-out, --figure,
-/// --fps, --resolution and --timeout; false (said on stderr) when they are wrong.
+/// --fps, --resolution, --mount-shift and --timeout; false (said on stderr) when they are wrong.
 bool parseOptions(int argc, char** argv);
 const TestOptions& options();
 CaptureOptions captureOptions();

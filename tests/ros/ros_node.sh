@@ -135,10 +135,12 @@ echo_messages() {
   echo "rostopic echo: the floor and the decision of the last frame"
 }
 
-# 3. The program alone, odometry poses, the picture.
-after_check=echo_messages checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
+# 3. The program alone: odometry poses, the robot's camera mount on TF, the map's parameters.
+after_check=echo_messages checked_run fig8 --scenario fig8 --frames 8 --poses odom \
+  --robot 1.0,0.5,90 --resolution 0.02 --mount-shift 0.3 \
   --figure "$work/ros_view.png" -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 \
   _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 \
+  _publish_mount_tf:=false \
   _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 _sensor_model/min:=0.1 _sensor_model/max:=0.95 \
   _pointcloud_max_z:=0.25
 [[ -s $work/ros_view.png ]] || fail "no picture"

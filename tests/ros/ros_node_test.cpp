@@ -129,7 +129,10 @@ TEST(RosNode, GroupsAreTheScenariosObjectsWithTheirHeights) {
   const auto& arrays = capture().markers.items;
   for (std::size_t i = 0; i < arrays.size(); ++i) {
     for (const auto& box : groupBoxes(*arrays[i].message)) {
-      const Eigen::Vector3d centre(box.pose.position.x, box.pose.position.y, 0.0);
+      // With the robot's mount on TF the camera is mount_shift further forward than it is: the
+      // groups come that much further ahead.
+      const Eigen::Vector3d centre(box.pose.position.x - options().mount_shift, box.pose.position.y,
+                                   0.0);
       const SceneObject* object = objectUnder(scenario, scenario.worldFromRobot(i), centre, 0.01);
       ASSERT_NE(object, nullptr) << "frame " << i << ": a group at " << centre.transpose()
                                  << " where the scene has no object";
@@ -310,13 +313,18 @@ TEST(RosNode, ReportsFpsDroppedFramesAndTheFloorInDiagnostics) {
   EXPECT_EQ(diagnosticValue(*finished, "frames processed"), std::to_string(options().frames));
   EXPECT_EQ(diagnosticValue(*finished, "dropped frames"), "0");
   EXPECT_EQ(diagnosticValue(*finished, "found floor"), "true");
+  EXPECT_EQ(
+      diagnosticValue(*finished, "camera mount"),
+      options().mount_shift != 0.0 ? "TF base_footprint -> multislit_optical" : "sensor file");
   EXPECT_EQ(finished->level, diagnostic_msgs::DiagnosticStatus::OK);
 }
 
-TEST(RosNode, PublishesTheCameraMountFromTheSensorOnTf) {
+// The sensor file's mount, published by the node; or the robot's, which the node takes.
+TEST(RosNode, TheCameraMountOnTfIsTheSensorsOrTheRobots) {
   const std::optional<Eigen::Isometry3d> mount = baseFromCamera();
   ASSERT_TRUE(mount.has_value());
-  const Eigen::Isometry3d expected_mount = expected().base_from_camera;
+  const Eigen::Isometry3d expected_mount =
+      captureOptions().mount.value_or(expected().base_from_camera);
   EXPECT_LT((mount->translation() - expected_mount.translation()).norm(), 1e-6);
   EXPECT_LT((mount->linear() - expected_mount.linear()).norm(), 1e-6);
 }
