@@ -4,6 +4,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "map_input.h"
+#include "map_input_sim.h"
 #include "map_outputs.h"
 #include "output_file.h"
 
@@ -146,7 +147,7 @@ int runMap(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);
-  MapInput in = openMapInput(inputOptions(args));
+  MapInput in = openMapInput(inputOptions(args), openSimulatedInput);
   PipelineConfig config;
   config.sensor = in.sensor;
   Pipeline pipeline(config);

@@ -6,6 +6,7 @@
 #include "common.h"
 #include "config_options.h"
 #include "multislit/units.h"
+#include "object_outline.h"
 #include "output_file.h"
 #include "plot.h"
 #include "recording.h"
@@ -306,7 +307,7 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
     char note[96];
     std::snprintf(note, sizeof note, "%s (frames %d-%d)", name.c_str(), rec.first_detected,
                   rec.last_detected);
-    r.top.objects.push_back(rec.object);
+    r.top.objects.push_back(outlineOf(rec.object));
     r.top.object_notes.push_back(note);
   }
   walk.map().save((out / "map.bt").string());

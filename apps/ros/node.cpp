@@ -1,6 +1,7 @@
 #include "node.h"
 
 #include "ros_messages.h"
+#include "simulated_input.h"
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <nav_msgs/Odometry.h>
@@ -39,7 +40,7 @@ std::string str(const T& value) {
 
 Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : config_(config),
-      in_(apps::openMapInput(config.input)),
+      in_(apps::openMapInput(config.input, simulatedInput())),
       pipeline_(pipelineConfig(in_, config)),
       extractor_(in_.reference),
       poses_(config_, in_, pipeline_.config(), nh) {
