@@ -113,7 +113,7 @@ bag=$!
 pids+=($bag)
 checked_run ball --scenario ball --frames 30 --poses tf --node-out "$work/node_ball" \
   --map-out "$work/map" -- roslaunch multislit_ros multislit.launch simulate:=ball frames:=30 \
-  poses:=tf pose_timeout:=1.0 out:="$work/node_ball" wait_for_subscribers:=2
+  poses:=tf pose_timeout:=1.0 out:="$work/node_ball" wait_for_subscribers:=2 resolution:=0.01
 stop $bag
 
 # rospy reads the node's messages (genpy's modules in the package's python/): rostopic echo prints
