@@ -135,24 +135,29 @@ echo_messages() {
   echo "rostopic echo: the floor and the decision of the last frame"
 }
 
-# 3. The program alone: odometry poses, the robot's camera mount on TF, the map's parameters.
+# 3. The program alone: odometry poses, the map's parameters, the picture.
 after_check=echo_messages checked_run fig8 --scenario fig8 --frames 8 --poses odom \
-  --robot 1.0,0.5,90 --resolution 0.02 --mount-shift 0.3 \
-  --figure "$work/ros_view.png" -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 \
-  _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 \
-  _publish_mount_tf:=false \
-  _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 _sensor_model/min:=0.1 _sensor_model/max:=0.95 \
-  _pointcloud_max_z:=0.25
+  --robot 1.0,0.5,90 --resolution 0.02 --figure "$work/ros_view.png" -- \
+  "$package/multislit_ros" _simulate:=fig8 _frames:=8 _poses:=odom _pose_timeout:=1.0 \
+  _wait_for_subscribers:=1 _resolution:=0.02 _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 \
+  _sensor_model/min:=0.1 _sensor_model/max:=0.95 _pointcloud_max_z:=0.25
 [[ -s $work/ros_view.png ]] || fail "no picture"
 grep -q "unknown parameter" "$work/fig8_node.log" &&
   fail "fig8: octomap_server's parameters were not known: $(grep "unknown parameter" "$work/fig8_node.log")"
-# octomap_server's parameters are checked by OccupancyMapConfig::validate(), named.
+
+# 4. The robot publishes the camera mount on TF, 0.3 m further forward than the sensor's: the node
+# takes it (the picture above keeps the sensor's).
+checked_run mount --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
+  --mount-shift 0.3 -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 _poses:=odom \
+  _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 _publish_mount_tf:=false
+# octomap_server's parameters are checked by OccupancyMapConfig::validate(), named (the last run:
+# the parameter stays on the server).
 "$package/multislit_ros" _simulate:=fig8 _sensor_model/hit:=0.3 >"$work/bad_param.log" 2>&1 &&
   fail "~sensor_model/hit 0.3 was taken"
 grep -q "~sensor_model/hit: OccupancyMapConfig.prob_hit must be in (0.5, 1)" "$work/bad_param.log" ||
   fail "~sensor_model/hit 0.3: $(tail -3 "$work/bad_param.log")"
 
-# 4. The bag.
+# 5. The bag.
 rosbag info "$work/run.bag" >"$work/bag_info.txt" 2>&1 || fail "rosbag info: $(cat "$work/bag_info.txt")"
 cat "$work/bag_info.txt"
 for topic in "${topics[@]}"; do
@@ -163,7 +168,7 @@ done
 grep -q "/multislit/rdmap  *30 msgs" "$work/bag_info.txt" || fail "the bag has not the 30 clouds"
 grep -q "octomap_msgs/Octomap  *\[9a45536b45c5e409cd49f04bb2d9999f\]" "$work/bag_info.txt" ||
   fail "the bag's octomap_msgs/Octomap is not upstream's"
-# 5. The package's rviz view shows only topics the node published (the bag holds them).
+# 6. The package's rviz view shows only topics the node published (the bag holds them).
 /usr/bin/python3 - "$package/rviz/multislit.rviz" "$work/bag_info.txt" <<'EOF' || fail "rviz/multislit.rviz"
 import sys, yaml
 config = yaml.safe_load(open(sys.argv[1]))
