@@ -16,10 +16,11 @@ PACKAGES=(cmake g++ make pkg-config libpcl-dev libopencv-dev liboctomap-dev liba
   libeigen3-dev libflann-dev libgtest-dev libbenchmark-dev octomap-tools clang-format lld
   ninja-build
   # Debian's ROS 1, for the node apps/ros and its test: roscpp, TF, the messages, gencpp with
-  # std_msgs' .msg files, roscore and roslaunch, rosbag record and info
+  # std_msgs' .msg files, roscore and roslaunch, rosbag record and info; genpy and rostopic for
+  # the messages' Python modules and their test
   libroscpp-dev libtf2-ros-dev libpcl-conversions-dev libsensor-msgs-dev libvisualization-msgs-dev
   libnav-msgs-dev libdiagnostic-msgs-dev python3-gencpp ros-std-msgs python3-roslaunch
-  python3-rosbag)
+  python3-rosbag python3-genpy python3-std-msgs python3-rostopic)
 
 cd "$(dirname "${BASH_SOURCE[0]}")"
 JOBS=$(nproc)

@@ -4,6 +4,8 @@
 
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
+#include "multislit/obstacles.h"
+#include "multislit/occupancy_map.h"
 
 #include <octomap/OcTree.h>
 #include <pcl/ModelCoefficients.h>
@@ -30,7 +32,7 @@ struct StockPath {
     segmentation.setProbability(FloorDetectorConfig{}.probability);
     segmentation.setOptimizeCoefficients(true);  // PCL's default, like our eq. (2) refit
     clustering.setClusterTolerance(0.02);        // [m]: the points of a slit are 1-3 mm apart
-    clustering.setMinClusterSize(3);             // as ObstacleClustererConfig::min_points
+    clustering.setMinClusterSize(ObstacleClustererConfig{}.min_points);
     clustering.setSearchMethod(pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
   }
   pcl::SACSegmentation<pcl::PointXYZ> segmentation;
@@ -99,7 +101,7 @@ PathRun runStockPath(const BenchInput& in, int passes, double threshold) {
   std::vector<pcl::PointCloud<PointRDM>> clouds(n);  // extraction is ours: timed there
   for (std::size_t k = 0; k < n; ++k) extractor.extract(in.images[k], clouds[k]);
   for (int pass = -1; pass < passes; ++pass) {
-    octomap::OcTree tree(0.01);  // the resolution of OccupancyMapConfig [m]
+    octomap::OcTree tree(OccupancyMapConfig{}.resolution);
     for (std::size_t k = 0; k < n; ++k) {
       const double t0 = threadSeconds();
       const bool found = stockFloor(clouds[k], stock);

@@ -39,6 +39,8 @@ class ArgParser {
   double number(const std::string& name, double lo, double hi) const;
   long integer(const std::string& name, long lo, long hi) const;
   bool has(const std::string& name) const;  ///< flag given, or option given a non-empty value
+  /// Whether the command declares an option or flag `name`.
+  bool declares(const std::string& name) const { return specs_.count(name) > 0; }
   /// Whether the command line named the option (its default aside).
   bool given(const std::string& name) const { return given_.count(name) > 0; }
   std::vector<std::string> list(const std::string& name) const;

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "config_options.h"
 #include "output_file.h"
 
 #include "multislit/reference.h"
@@ -18,11 +19,12 @@ namespace {
 // --region-width, --estimator, --min-contrast and --slits.
 ReferenceConfig referenceConfigFromArgs(const cli::ArgParser& args) {
   ReferenceConfig rc;
-  rc.region_width = static_cast<int>(args.integer("region-width"));
+  rc.region_width = intOption(args, "region-width");
   rc.estimator = parseEstimator(args.str("estimator"));
   rc.min_contrast = args.number("min-contrast");
-  rc.expected_slits = static_cast<int>(args.integer("slits"));
+  rc.expected_slits = intOption(args, "slits");
   rc.full_scale = fullScaleFromArgs(args);
+  validateOptions(rc, args, {{"expected_slits", "slits"}});
   return rc;
 }
 
@@ -108,10 +110,14 @@ int runCalibrate(int argc, char** argv) {
   args.option("sensor", "",
               "sensor YAML: camera intrinsics and the reference pose (default: the paper's)");
   args.repeatable("plane", "DEPTH:IMAGE, a wall at DEPTH metres");
-  args.option("region-width", "0", "assigned region width [px]; 0: the widest without overlap");
-  args.option("estimator", "gaussian", "sub-pixel estimator: gaussian, centroid or windowed");
-  args.option("min-contrast", "0.06", "slit peak above its background [share of full scale]");
-  args.option("slits", "15", "number of slits the projector casts");
+  const ReferenceConfig defaults;
+  args.option("region-width", defaultText(defaults.region_width),
+              "assigned region width [px]; 0: the widest without overlap");
+  args.option("estimator", estimatorName(defaults.estimator),
+              "sub-pixel estimator: gaussian, centroid or windowed");
+  args.option("min-contrast", defaultText(defaults.min_contrast),
+              "slit peak above its background [share of full scale]");
+  args.option("slits", defaultText(defaults.expected_slits), "number of slits the projector casts");
   addFullScaleOption(args, "the camera's white", "kept in the calibration");
   args.option("camera-id", "",
               "serial number (or DeviceID) of the camera; another is refused when the calibration "

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "config_options.h"
 #include "output_file.h"
 
 #include "multislit/extractor.h"
@@ -13,6 +14,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <string>
 
 namespace multislit::apps {
 namespace {
@@ -96,43 +99,58 @@ void writeJsonLine(std::ostream& out, const std::string& frame,
   out << "]}\n";
 }
 
+// --iterations sets FloorDetectorConfig::max_iterations; the other options are named after their
+// fields.
+const std::map<std::string, std::string> kRenamed = {{"max_iterations", "iterations"}};
+
 FloorDetectorConfig detectorConfig(const cli::ArgParser& args) {
   FloorDetectorConfig fc;
-  fc.sigma = args.number("sigma", 0.001, 100);
+  fc.sigma = args.number("sigma");
   fc.estimate_sigma = !args.has("fixed-sigma");
-  fc.min_sigma = args.number("min-sigma", 0.001, 100);
-  fc.max_sigma = args.number("max-sigma", 0.001, 100);
-  fc.threshold_sigmas = args.number("threshold-sigmas", 0.1, 100);
-  fc.max_iterations = static_cast<int>(args.integer("iterations", 0, 1000000));
+  fc.min_sigma = args.number("min-sigma");
+  fc.max_sigma = args.number("max-sigma");
+  fc.threshold_sigmas = args.number("threshold-sigmas");
+  fc.max_iterations = intOption(args, "iterations");
+  validateOptions(fc, args, kRenamed);
   return fc;
 }
 
 // --help: what detect measures and the fields of its JSON lines.
-constexpr const char* kSummary =
-    "Finds the floor in each frame's RDMap with RANSAC (eq. 1-3) and the points off it\n"
-    "(Sec. III-B). The threshold is 3 sigma, sigma measured in each frame's own floor residuals\n"
-    "(1.4826 x their median |residual|, clamped to [--min-sigma, --max-sigma]); off-plane "
-    "points\n"
-    "are grouped along slits and across adjacent slits, and groups of fewer than 3 points are\n"
-    "noise. Writes one JSON object per frame and line: frame, points, found, plane [A, B, C] of\n"
-    "dk = A u + B v + C, inliers, residual_std [px], sigma_px (the sigma used),\n"
-    "sigma_estimate_px (before clamping), threshold_px, off_plane_count (every point off the\n"
-    "plane), obstacle_count (points listed in obstacle_points), rejected_groups, stamp_us,\n"
-    "time_ms (image to floor), groups [{points, u, v (centroid), u_min, u_max, v_min, v_max},\n"
-    "...] (px) and obstacle_points [[u, v, dk], ...] (reference position and disparity, px):\n"
-    "the points of the groups, or with --raw every point off the plane. null: not found or not\n"
-    "measured.";
+std::string summary() {
+  return "Finds the floor in each frame's RDMap with RANSAC (eq. 1-3) and the points off it\n"
+         "(Sec. III-B). The threshold is --threshold-sigmas x sigma, sigma measured in each\n"
+         "frame's own floor residuals (1.4826 x their median |residual|, clamped to [--min-sigma,\n"
+         "--max-sigma]); off-plane points are grouped along slits and across adjacent slits, and\n"
+         "groups of fewer than " +
+         std::to_string(ObstacleClustererConfig{}.min_points) +
+         " points are noise. Writes one JSON object per frame and line: frame,\n"
+         "points, found, plane [A, B, C] of dk = A u + B v + C, inliers, residual_std [px],\n"
+         "sigma_px (the sigma used), sigma_estimate_px (before clamping), threshold_px,\n"
+         "off_plane_count (every point off the plane), obstacle_count (points listed in\n"
+         "obstacle_points), rejected_groups, stamp_us, time_ms (image to floor), groups [{points,\n"
+         "u, v (centroid), u_min, u_max, v_min, v_max}, ...] (px) and obstacle_points [[u, v, "
+         "dk],\n"
+         "...] (reference position and disparity, px): the points of the groups, or with --raw\n"
+         "every point off the plane. null: not found or not measured.";
+}
 
 void addDetectOptions(cli::ArgParser& args) {
+  const FloorDetectorConfig defaults;
   addReferenceOptions(args);
   addExtractorOptions(args);
-  args.option("sigma", "0.3", "sensor noise sigma [px]: RANSAC's threshold is 3 sigma");
+  args.option("sigma", defaultText(defaults.sigma),
+              "sensor noise sigma [px]: RANSAC's threshold is --threshold-sigmas x sigma");
   args.flag("fixed-sigma", "use --sigma for every frame instead of measuring each frame's");
-  args.option("min-sigma", "0.3", "lower bound of the measured sigma [px]");
-  args.option("max-sigma", "1.0", "upper bound of the measured sigma [px]");
-  args.option("threshold-sigmas", "3", "floor / obstacle threshold in sigmas");
-  args.option("iterations", "0", "RANSAC iterations; 0: from eq. (3) (35)");
-  args.flag("raw", "obstacle_points: every point off the plane, also groups below 3 points");
+  args.option("min-sigma", defaultText(defaults.min_sigma),
+              "lower bound of the measured sigma [px]");
+  args.option("max-sigma", defaultText(defaults.max_sigma),
+              "upper bound of the measured sigma [px]");
+  args.option("threshold-sigmas", defaultText(defaults.threshold_sigmas),
+              "floor / obstacle threshold in sigmas");
+  args.option("iterations", defaultText(defaults.max_iterations),
+              "RANSAC iterations; 0: from eq. (3) (" + std::to_string(defaults.iterations()) + ")");
+  args.flag("raw", "obstacle_points: every point off the plane, also groups below " +
+                       std::to_string(ObstacleClustererConfig{}.min_points) + " points");
   args.option("out", "", "JSONL file to write (required)");
   args.positionals("FRAME...", "8- or 16-bit images", 1);
 }
@@ -140,7 +158,7 @@ void addDetectOptions(cli::ArgParser& args) {
 }  // namespace
 
 int runDetect(int argc, char** argv) {
-  cli::ArgParser args("detect", kSummary);
+  cli::ArgParser args("detect", summary());
   addDetectOptions(args);
   if (!args.parse(argc, argv)) return 0;
   if (!args.has("out")) throw cli::UsageError("--out is required");
@@ -148,7 +166,7 @@ int runDetect(int argc, char** argv) {
   const ExtractorConfig ec = extractorConfigFromArgs(args);
   const Extractor extractor(referenceFromArgs(args), ec);
   const FloorDetector detector(detectorConfig(args));
-  const ObstacleClusterer clusterer;  // grid groups, at least 3 points
+  const ObstacleClusterer clusterer;  // the default grouping (grid) and noise rule
   const bool raw = args.has("raw");
 
   const std::vector<std::string>& frames = args.rest();

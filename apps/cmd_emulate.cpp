@@ -1,6 +1,7 @@
 // multislit emulate: a GigE Vision camera on 127.0.0.1 serving the simulator's images of a walk.
 #include "cli.h"
 #include "commands.h"
+#include "config_options.h"
 #include "output_file.h"
 
 #include "multislit/sim/camera_emulator.h"
@@ -31,7 +32,7 @@ EmulatorConfig emulatorConfigFromArgs(const cli::ArgParser& args) {
   try {
     config.validate();
   } catch (const std::invalid_argument& e) {
-    throw cli::UsageError(e.what());
+    throw cli::UsageError(optionMessage(e.what(), args, {{"lost_packet_ratio", "loss"}}));
   }
   return config;
 }
@@ -162,12 +163,15 @@ std::unique_ptr<CameraEmulator> makeCamera(const cli::ArgParser& args, const Sen
 void addOptions(cli::ArgParser& args) {
   args.option("scenario", "ball", "named scenario whose walk is filmed");
   args.option("frames", "16", "walk frames rendered beforehand and served in turn");
-  args.option("fps", "30", "frame rate until a client sets its own [Hz]");
+  const EmulatorConfig emulator;
+  const RenderConfig render;
+  args.option("fps", defaultText(emulator.fps), "frame rate until a client sets its own [Hz]");
   args.option("seconds", "0", "serve this long [s]; 0: until interrupted");
-  args.option("serial", "MULTISLIT", "device serial number");
-  args.option("loss", "0", "fraction of stream packets not sent, to test lossy links");
-  args.option("bit-depth", "8", "8 (Mono8) or 16 (Mono16)");
-  args.option("seed", "1", "noise seed");
+  args.option("serial", emulator.serial, "device serial number");
+  args.option("loss", defaultText(emulator.lost_packet_ratio),
+              "fraction of stream packets not sent, to test lossy links");
+  args.option("bit-depth", defaultText(render.bit_depth), "8 (Mono8) or 16 (Mono16)");
+  args.option("seed", std::to_string(render.seed), "noise seed");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("walk",

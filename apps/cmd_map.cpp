@@ -3,7 +3,9 @@
 // image -> RDMap -> floor -> obstacle groups -> OctoMap -> footsteps -> walk / turn / stop.
 #include "cli.h"
 #include "commands.h"
+#include "config_options.h"
 #include "map_input.h"
+#include "map_input_sim.h"
 #include "map_outputs.h"
 #include "output_file.h"
 
@@ -36,9 +38,10 @@ void declareMapOptions(cli::ArgParser& args) {
               "FILE (odometry CSV: stamp_us,x,y,z,roll,pitch,yaw), still (a robot standing at "
               "the origin) or gait (the built-in gait model walks as the decisions say); default: "
               "the sequence's odometry.csv, the scenario's motion, else still");
-  args.option("max-gap", "0.5", "odometry samples farther apart are not interpolated [s]");
+  args.option("max-gap", defaultText(MapPoseOptions{}.max_gap),
+              "odometry samples farther apart are not interpolated [s]");
   args.option("frames", "0", "stop after this many frames (0: all, or until Ctrl-C)");
-  args.option("fps", "30", "camera frame rate [Hz]");
+  args.option("fps", defaultText(MapInputOptions{}.fps), "camera frame rate [Hz]");
   args.option("out", "out/map", "output folder");
 }
 
@@ -146,7 +149,7 @@ int runMap(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);
-  MapInput in = openMapInput(inputOptions(args));
+  MapInput in = openMapInput(inputOptions(args), openSimulatedInput);
   PipelineConfig config;
   config.sensor = in.sensor;
   Pipeline pipeline(config);

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "config_options.h"
 #include "output_file.h"
 
 #include "multislit/odometry.h"
@@ -62,14 +63,16 @@ void addSimulateOptions(cli::ArgParser& args) {
 
 // --scenario or --wall-depth, with --scene and the pose's overrides.
 Scenario scenarioFromArgs(const cli::ArgParser& args) {
-  // The ranges of SensorConfig::validate() (mount) and of a walk's step.
   Scenario scenario = args.has("wall-depth") ? makeWallScenario(args.number("wall-depth", 0.05, 10))
                                              : makeScenario(args.str("scenario"));
   if (args.has("scene")) scenario.scene = Scene::load(args.str("scene"));
-  if (args.has("tilt")) scenario.mount.tilt = args.number("tilt", 0, 90);
-  if (args.has("roll")) scenario.mount.roll = args.number("roll", -45, 45);
-  if (args.has("height")) scenario.mount.height = args.number("height", 0.001, 9.999);
-  if (args.has("step")) scenario.step = args.number("step", -1, 1);
+  if (args.has("tilt")) scenario.mount.tilt = args.number("tilt");
+  if (args.has("roll")) scenario.mount.roll = args.number("roll");
+  if (args.has("height")) scenario.mount.height = args.number("height");
+  if (args.has("step")) scenario.step = args.number("step", -1, 1);  // a walk's step: within 1 m
+  SensorConfig pose;  // the mount's ranges are SensorConfig::validate()'s
+  pose.mount = scenario.mount;
+  validateOptions(pose, args);
   return scenario;
 }
 

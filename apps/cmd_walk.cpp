@@ -4,7 +4,9 @@
 #include "cli.h"
 #include "commands.h"
 #include "common.h"
+#include "config_options.h"
 #include "multislit/units.h"
+#include "object_outline.h"
 #include "output_file.h"
 #include "plot.h"
 #include "recording.h"
@@ -29,13 +31,17 @@ namespace multislit::apps {
 namespace {
 
 void declareWalkOptions(cli::ArgParser& args) {
+  const WalkConfig defaults;
   args.option("out", "out/walk", "output folder");
   args.option("frames", std::to_string(kWalkFrames),
               "frames to walk (30 Hz; the paper's run is about 900)");
-  args.option("seed", "1", "noise seed of the images (or of the synthesized RDMaps)");
-  args.option("ball-frame", "200", "frame the ping-pong ball lands in front of the foot");
-  args.option("step-length", "0.04", "the body's advance per step [m]");
-  args.option("step-frames", "24", "frames per step (24: 0.8 s, 50 mm/s with 40 mm steps)");
+  args.option("seed", std::to_string(defaults.render_config.seed),
+              "noise seed of the images (or of the synthesized RDMaps)");
+  args.option("ball-frame", defaultText(defaults.scene.ball_frame),
+              "frame the ping-pong ball lands in front of the foot");
+  args.option("step-length", defaultText(defaults.pipeline.foot.step_length),
+              "the body's advance per step [m]");
+  args.option("step-frames", defaultText(defaults.gait.step_frames), "frames per step");
   args.option("cluster", "grid", "obstacle grouping: grid (RDMap neighbours) or euclidean");
   args.option("screw", "", "X,Y: add a screw head 6 mm across, 2 mm high, at world (X, Y) [m]");
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
@@ -64,10 +70,11 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
   c.synth.seed = c.render_config.seed;
   c.scene.ball = !args.has("no-ball");
   c.scene.cable = !args.has("no-cable");
-  c.scene.ball_frame = static_cast<int>(args.integer("ball-frame", 0, 100000000));
-  c.scene.ball_roll_frame = c.scene.ball_frame + 60;
-  c.pipeline.foot.step_length = args.number("step-length", 0.001, 0.4);
-  c.gait.step_frames = static_cast<int>(args.integer("step-frames", 2, 100000));
+  c.scene.ball_frame = intOption(args, "ball-frame");
+  // The ball rolls away as long after it lands as by default.
+  c.scene.ball_roll_frame += c.scene.ball_frame - WalkSceneConfig{}.ball_frame;
+  c.pipeline.foot.step_length = args.number("step-length");
+  c.gait.step_frames = intOption(args, "step-frames");
   const std::string cluster = args.str("cluster");
   if (cluster != "grid" && cluster != "euclidean")
     throw cli::UsageError("--cluster must be grid or euclidean");
@@ -90,7 +97,7 @@ WalkConfig configFromArgs(const cli::ArgParser& args) {
     if (args.has("measure-sweep")) measureSweep(c);
     c.validate();
   } catch (const std::invalid_argument& e) {
-    throw cli::UsageError(e.what());
+    throw cli::UsageError(optionMessage(e.what(), args));
   }
   return c;
 }
@@ -300,7 +307,7 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
     char note[96];
     std::snprintf(note, sizeof note, "%s (frames %d-%d)", name.c_str(), rec.first_detected,
                   rec.last_detected);
-    r.top.objects.push_back(rec.object);
+    r.top.objects.push_back(outlineOf(rec.object));
     r.top.object_notes.push_back(note);
   }
   walk.map().save((out / "map.bt").string());

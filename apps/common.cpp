@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
+#include <utility>
 
 namespace multislit::apps {
 
@@ -82,15 +83,26 @@ std::string jsonString(const std::string& s) {
   return out + "\"";
 }
 
+namespace {
+constexpr std::pair<Estimator, const char*> kEstimatorNames[] = {{Estimator::Gaussian, "gaussian"},
+                                                                 {Estimator::Centroid, "centroid"},
+                                                                 {Estimator::Windowed, "windowed"}};
+}  // namespace
+
 Estimator parseEstimator(const std::string& name) {
-  if (name == "gaussian") return Estimator::Gaussian;
-  if (name == "centroid") return Estimator::Centroid;
-  if (name == "windowed") return Estimator::Windowed;
+  for (const auto& [estimator, text] : kEstimatorNames)
+    if (name == text) return estimator;
   throw cli::UsageError("--estimator must be gaussian, centroid or windowed, not '" + name + "'");
 }
 
+std::string estimatorName(Estimator estimator) {
+  for (const auto& [e, text] : kEstimatorNames)
+    if (e == estimator) return text;
+  throw std::logic_error("an estimator without a name");
+}
+
 void addExtractorOptions(cli::ArgParser& args) {
-  args.option("estimator", "gaussian",
+  args.option("estimator", estimatorName(ExtractorConfig{}.estimator),
               "sub-pixel estimator of the row's profile: gaussian, centroid or windowed (it sets "
               "the centre only with --along-row)");
   args.flag("along-row",

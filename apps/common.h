@@ -17,6 +17,8 @@ namespace multislit::apps {
 void writeImage(const std::string& path, const cv::Mat& image);
 /// "gaussian", "centroid" or "windowed"; throws cli::UsageError otherwise.
 Estimator parseEstimator(const std::string& name);
+/// The command line's name of an estimator, as parseEstimator() reads it.
+std::string estimatorName(Estimator estimator);
 /// Declares --estimator and --along-row, how a command measures a slit's centre in frames.
 void addExtractorOptions(cli::ArgParser& args);
 /// The extractor config of those options.

@@ -2,31 +2,11 @@
 
 #include "cli.h"
 
-#include "multislit/sim/simulated_source.h"
-
 #include <filesystem>
 #include <utility>
 
 namespace multislit::apps {
-namespace {
-
-MapInput openSimulator(const MapInputOptions& o, MapInput in) {
-  SimulatorSourceConfig config;
-  config.scenario = o.simulate;
-  config.frames = o.frames;
-  if (o.paced) config.fps = o.fps;
-  auto simulator = std::make_unique<SimulatorSource>(config);
-  if (o.calibration.empty()) in.reference = simulator->makeReference();
-  in.scenario = simulator->scenario();
-  in.sensor.mount = in.scenario->mount;
-  in.description = simulator->name();
-  in.source = std::move(simulator);
-  return in;
-}
-
-}  // namespace
-
-MapInput openMapInput(const MapInputOptions& o) {
+MapInput openMapInput(const MapInputOptions& o, const SimulatedInputOpener& simulated) {
   const std::string& p = o.prefix;
   const int given = !o.camera.empty() + !o.sequence.empty() + !o.simulate.empty();
   if (given != 1)
@@ -38,7 +18,11 @@ MapInput openMapInput(const MapInputOptions& o) {
   else if (!o.sequence.empty() && std::filesystem::exists(sequence / "sensor.yaml"))
     in.sensor = SensorConfig::load((sequence / "sensor.yaml").string());
   if (!o.calibration.empty()) in.reference = Reference::load(o.calibration);
-  if (!o.simulate.empty()) return openSimulator(o, std::move(in));
+  if (!o.simulate.empty()) {
+    if (!simulated)
+      throw cli::UsageError(p + "simulate: this program was built without the simulator");
+    return simulated(o, std::move(in));
+  }
   if (o.calibration.empty())
     throw cli::UsageError(p + "calibration FILE is needed (the reference of multislit calibrate)");
   if (!o.camera.empty()) {
@@ -66,9 +50,9 @@ MapPoses::MapPoses(const MapPoseOptions& options, const std::string& sequence, c
   const std::filesystem::path recorded = std::filesystem::path(sequence) / "odometry.csv";
   if (choice.empty())
     choice = !sequence.empty() && std::filesystem::exists(recorded) ? recorded.string()
-             : in.scenario                                          ? "scenario"
+             : in.scenario_motion                                   ? "scenario"
                                                                     : "still";
-  if (choice == "scenario" && !in.scenario)
+  if (choice == "scenario" && !in.scenario_motion)
     throw cli::UsageError(options.prefix + "poses scenario needs " + options.prefix + "simulate");
   mode_ = choice == "still" || choice == "gait" || choice == "scenario" ? choice : "file";
   if (mode_ == "file") {
@@ -76,7 +60,7 @@ MapPoses::MapPoses(const MapPoseOptions& options, const std::string& sequence, c
       throw cli::UsageError(options.prefix + options.max_gap_name + " must be in [1e-06, 3600]");
     odometry_.emplace(Odometry::load(choice, static_cast<std::uint64_t>(options.max_gap * 1e6)));
   }
-  scenario_ = in.scenario;
+  scenario_motion_ = in.scenario_motion;
   description_ = mode_ == "file" ? "odometry " + choice : mode_;
 }
 
@@ -88,7 +72,7 @@ std::optional<PipelineInput> MapPoses::at(const Frame& frame, PoseMiss& miss) co
     if (!pose) return std::nullopt;
     in.world_from_robot = *pose;
   } else if (mode_ == "scenario") {
-    in.world_from_robot = scenario_->worldFromRobot(frame.seq);
+    in.world_from_robot = scenario_motion_(frame.seq);
   } else if (mode_ == "gait") {
     in.world_from_robot = gait_.worldFromRobot();
     in.next_foot = gait_.nextFoot();

@@ -1,7 +1,8 @@
 // What `multislit map` and the ROS node (apps/ros) share: the frames' source with its reference
 // and sensor, and the robot's pose for each frame (an odometry file, standing still, the gait
 // model or the scenario's motion). Option names in messages carry the caller's prefix ("--" on
-// the command line, "~" for ROS private parameters).
+// the command line, "~" for ROS private parameters). The core library only: the simulated input
+// is map_input_sim.h's, handed to openMapInput() by the programs that link the simulator.
 #pragma once
 
 #include "multislit/gait.h"
@@ -9,10 +10,12 @@
 #include "multislit/pipeline.h"
 #include "multislit/reference.h"
 #include "multislit/sensor.h"
-#include "multislit/sim/scenarios.h"
 #include "multislit/sources.h"
 
+#include <Eigen/Geometry>
+
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -38,13 +41,18 @@ struct MapInput {
   std::unique_ptr<FrameSource> source;
   Reference reference;
   SensorConfig sensor;
-  std::optional<Scenario> scenario;  ///< simulate
+  /// simulate: the scenario's world-from-robot at each frame (seq); empty otherwise.
+  std::function<Eigen::Isometry3d(std::uint64_t)> scenario_motion;
   std::string description;
 };
 
-/// Opens the source (not started). Throws cli::UsageError for a wrong choice of options, and
-/// what the files' loaders throw.
-MapInput openMapInput(const MapInputOptions& options);
+/// Opens the simulated input of options.simulate into `in` (which holds the sensor and, when
+/// given, the calibration): map_input_sim.h's openSimulatedInput.
+using SimulatedInputOpener = std::function<MapInput(const MapInputOptions&, MapInput in)>;
+
+/// Opens the source (not started). Throws cli::UsageError for a wrong choice of options (the
+/// simulator without `simulated`), and what the files' loaders throw.
+MapInput openMapInput(const MapInputOptions& options, const SimulatedInputOpener& simulated = {});
 
 /// The choice of poses: a file (odometry CSV), "still", "gait" or "scenario".
 struct MapPoseOptions {
@@ -73,7 +81,7 @@ class MapPoses {
  private:
   std::string mode_, description_;
   std::optional<Odometry> odometry_;
-  std::optional<Scenario> scenario_;
+  std::function<Eigen::Isometry3d(std::uint64_t)> scenario_motion_;
   Gait gait_;
 };
 

@@ -134,31 +134,15 @@ TopView fit(const TopViewContent& c, cv::Size* size) {
   return view;
 }
 
-void drawObject(cv::Mat& img, const TopView& view, const SceneObject& o) {
-  const int r = std::max(1, static_cast<int>(std::lround(o.radius * view.scale)));
-  if (o.type == ShapeType::Sphere) {
-    cv::circle(img, view(o.centre.head<2>()), r, kObject, 2, cv::LINE_AA);
-  } else if (o.type == ShapeType::Cylinder) {  // its outline seen from above
-    const Eigen::Vector2d a = o.axis_start.head<2>(), b = o.axis_end.head<2>();
-    if ((b - a).norm() < o.radius) {  // standing: a disc
-      cv::circle(img, view(a), r, kObject, 1, cv::LINE_AA);
-      return;
-    }
-    const Eigen::Vector2d d = (b - a).normalized() * o.radius;
-    const Eigen::Vector2d side(-d.y(), d.x());
-    const std::vector<cv::Point> outline = {view(a + side), view(b + side), view(b - side),
-                                            view(a - side)};
-    cv::polylines(img, outline, true, kObject, 1, cv::LINE_AA);
-  } else {
-    Footprint box;
-    box.centre = o.centre.head<2>();
-    box.yaw = o.yaw * M_PI / 180;
-    box.length = o.size.x();
-    box.width = o.size.y();
-    std::vector<cv::Point> pts;
-    for (const Eigen::Vector2d& c : box.corners()) pts.push_back(view(c));
-    cv::polylines(img, pts, true, kObject, 2, cv::LINE_AA);
+void drawObject(cv::Mat& img, const TopView& view, const ObjectOutline& o) {
+  if (o.polygon.empty()) {
+    const int r = std::max(1, static_cast<int>(std::lround(o.radius * view.scale)));
+    cv::circle(img, view(o.centre), r, kObject, 2, cv::LINE_AA);
+    return;
   }
+  std::vector<cv::Point> pts;
+  for (const Eigen::Vector2d& c : o.polygon) pts.push_back(view(c));
+  cv::polylines(img, pts, true, kObject, 2, cv::LINE_AA);
 }
 
 void drawMapCells(cv::Mat& img, const TopView& view, const OccupancyMap& map) {
@@ -205,8 +189,8 @@ void drawTopView(const std::string& path, const OccupancyMap& map, const TopView
   for (std::size_t k = 0; k < c.objects.size(); ++k) {
     drawObject(img, view, c.objects[k]);
     if (k < c.object_notes.size())
-      drawText(img, c.object_notes[k], view(c.objects[k].centre.head<2>()) + cv::Point(12, -12),
-               0.45, kObject);
+      drawText(img, c.object_notes[k], view(c.objects[k].centre) + cv::Point(12, -12), 0.45,
+               kObject);
   }
   std::vector<cv::Point> line;
   for (const Pose2D& p : c.path) line.push_back(view(p.position()));

@@ -6,9 +6,10 @@
 #include "multislit/footsteps.h"
 #include "multislit/occupancy_map.h"
 #include "multislit/point_types.h"
-#include "multislit/sim/scene.h"
 
 #include <pcl/point_cloud.h>
+
+#include <Eigen/Core>
 
 #include <string>
 #include <vector>
@@ -20,12 +21,20 @@ namespace multislit::apps {
 void drawRDMapFigure(const std::string& path, const std::string& title,
                      const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor);
 
+/// A true object seen from above: a closed outline, or a circle (object_outline.h makes them
+/// from the simulator's objects).
+struct ObjectOutline {
+  std::vector<Eigen::Vector2d> polygon;  ///< closed outline in the world [m]; empty: the circle
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();  ///< the circle's centre, the label's [m]
+  double radius = 0.0;                               ///< the circle's [m]
+};
+
 /// What the top view shows besides the map.
 struct TopViewContent {
   std::vector<Pose2D> path;               ///< the body, every frame
   std::vector<Footstep> footsteps;        ///< every footstep, in order
   std::vector<double> clearances;         ///< of each footstep from the true objects [m]
-  std::vector<SceneObject> objects;       ///< true objects (outlines)
+  std::vector<ObjectOutline> objects;     ///< true objects
   std::vector<std::string> object_notes;  ///< a label per object
 };
 

@@ -1,5 +1,6 @@
 #include "multislit/reference.h"
 
+#include "config_check.h"
 #include "slit_tracks.h"
 #include "yaml_io.h"
 
@@ -91,9 +92,7 @@ double fitDisparityConstant(const std::vector<PlaneObservation>& obs) {
 }  // namespace
 
 void ReferenceConfig::validate() const {
-  auto require = [](bool ok, const char* field, const char* rule) {
-    if (!ok) throw std::invalid_argument(std::string("reference config: ") + field + " " + rule);
-  };
+  constexpr detail::FieldCheck require("ReferenceConfig");
   require(expected_slits >= 1 && expected_slits <= 64, "expected_slits", "must be in [1, 64]");
   require(region_width == 0 || (region_width >= 3 && region_width <= 16384), "region_width",
           "must be 0 (automatic) or in [3, 16384] px");

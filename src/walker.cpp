@@ -83,7 +83,7 @@ bool near(const Walker::Box& a, const Walker::Box& b, double margin) {
 
 std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, const OccupancyMap& map,
                                            const Pose2D& body) {
-  const double corridor = 0.5 * foot_.foot_separation + 0.5 * foot_.foot_width + config_.margin;
+  const double corridor = foot_.halfWidth() + config_.margin;
   const double m = config_.known_margin;
   const auto points = static_cast<std::size_t>(config_.sudden_min_points);
   // Lines below the floor, this frame and the last: a dark line on the floor along the slits

@@ -11,17 +11,23 @@ start_in "$work"
 "$M" simulate --scenario cable --frames 1 --out s >/dev/null 2>&1 || fail "simulate"
 "$M" calibrate --reference s/reference.png --out c.yaml >/dev/null 2>&1 || fail "calibrate"
 
-# simulate: the pose and the frame rate within SensorConfig's ranges.
+# simulate: the pose within SensorConfig::validate()'s ranges, named by option and field.
 refused_with 2 "--tilt must be a finite number, not 'nan'" "$M" simulate --tilt nan --out x
-refused_with 2 "--tilt must be in [0, 90], not 1000" "$M" simulate --tilt 1000 --out x
-refused_with 2 "--height must be in [0.001, 9.999], not -1" "$M" simulate --height -1 --out x
+refused_with 2 "--tilt: sensor config: mount.tilt must be in [0, 90] deg" \
+  "$M" simulate --tilt 1000 --out x
+refused_with 2 "--height: sensor config: mount.height must be in (0, 10) m" \
+  "$M" simulate --height -1 --out x
 refused_with 2 "--fps must be in [0.01, 100000], not 1e-300" "$M" simulate --fps 1e-300 --out x
 refused_with 2 "--frames must be a whole number in [0, 10000000]" "$M" simulate --frames -3 --out x
 refused_with 2 "--bit-depth must be a whole number in [8, 16]" "$M" simulate --bit-depth 99 --out x
 [[ ! -e x ]] || fail "a refused simulate wrote x/"
-# detect, walk, bench, calibrate.
-refused_with 2 "--iterations must be a whole number in [0, 1000000]" \
+# detect, walk, bench, calibrate: the ranges of the config structs' validate().
+refused_with 2 "--iterations: FloorDetectorConfig.max_iterations must be in [0, 1000000]" \
   "$M" detect --calibration c.yaml --iterations 2000000000 --out d.jsonl s/frame_000000.png
+refused_with 2 "--max-sigma: FloorDetectorConfig.max_sigma must be >= min_sigma" \
+  "$M" detect --calibration c.yaml --max-sigma 0.1 --out d.jsonl s/frame_000000.png
+refused_with 2 "--step-length: FootConfig.step_length must be in (0, 0.5) m" \
+  "$M" walk --step-length 0.5 --out w
 refused_with 2 "--threshold-sigmas must be a finite number" \
   "$M" detect --calibration c.yaml --threshold-sigmas inf --out d.jsonl s/frame_000000.png
 refused_with 2 "--screw needs X,Y in metres" "$M" walk --screw nan,nan --out w
@@ -34,7 +40,7 @@ refused_with 2 "--ahead must be a whole number in [1, 100000], not 0" "$M" emula
 refused_with 2 "--ahead needs --walk" "$M" emulate --ahead 5
 refused_with 2 "--ahead 5000: at most 1718 images of this size fit in 2 GiB" \
   "$M" emulate --walk --ahead 5000
-refused_with 1 "region_width must be 0 (automatic) or in [3, 16384] px" \
+refused_with 2 "--region-width: ReferenceConfig.region_width must be 0 (automatic)" \
   "$M" calibrate --reference s/reference.png --region-width 2 --out r.yaml
 refused_with 2 "--full-scale must be in [0, 65535]" \
   "$M" calibrate --reference s/reference.png --full-scale 70000 --out r.yaml

@@ -1,6 +1,7 @@
 #include "node.h"
 
 #include "ros_messages.h"
+#include "simulated_input.h"
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <nav_msgs/Odometry.h>
@@ -14,9 +15,10 @@
 namespace multislit::ros_node {
 namespace {
 
-PipelineConfig pipelineConfig(const apps::MapInput& in) {
+PipelineConfig pipelineConfig(const apps::MapInput& in, const NodeConfig& node) {
   PipelineConfig config;
   config.sensor = in.sensor;
+  config.map = node.map;
   return config;
 }
 
@@ -38,18 +40,22 @@ std::string str(const T& value) {
 
 Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
     : config_(config),
-      in_(apps::openMapInput(config.input)),
-      pipeline_(pipelineConfig(in_)),
+      in_(apps::openMapInput(config.input, simulatedInput())),
+      pipeline_(pipelineConfig(in_, config)),
       extractor_(in_.reference),
       poses_(config_, in_, pipeline_.config(), nh) {
   if (!config_.out.empty()) recorder_.emplace(config_.out);
   rdmap_ = pnh.advertise<sensor_msgs::PointCloud2>("rdmap", 5);
-  floor_ = pnh.advertise<multislit_ros::Floor>("floor", 10);
+  // The floor and the decision are latched as the map is: who subscribes late (a controller,
+  // rostopic echo) gets the last frame's at once.
+  floor_ = pnh.advertise<multislit_ros::Floor>("floor", 10, true);
   obstacles_ = pnh.advertise<sensor_msgs::PointCloud2>("obstacles", 5);
   markers_ = pnh.advertise<visualization_msgs::MarkerArray>("obstacle_markers", 5);
   octomap_ = pnh.advertise<octomap_msgs::Octomap>("octomap_binary", 1, true);  // latched
+  octomap_full_ = pnh.advertise<octomap_msgs::Octomap>("octomap_full", 1, true);
+  projected_ = pnh.advertise<nav_msgs::OccupancyGrid>("projected_map", 1, true);
   occupied_ = pnh.advertise<sensor_msgs::PointCloud2>("octomap_point_cloud_centers", 1, true);
-  decision_ = pnh.advertise<multislit_ros::Decision>("decision", 10);
+  decision_ = pnh.advertise<multislit_ros::Decision>("decision", 10, true);
   diagnostics_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 10);
   if (config_.publish_mount_tf)  // the sensor file's mount: base_frame -> camera_frame
     static_tf_.sendTransform(transformMessage(pipeline_.geometry().robotFromCamera(),
@@ -70,7 +76,8 @@ std_msgs::Header Node::header(const ros::Time& stamp, const std::string& frame) 
 void Node::waitForSubscribers() const {
   if (config_.wait_for_subscribers == 0) return;
   const std::vector<const ros::Publisher*> topics = {
-      &rdmap_, &floor_, &obstacles_, &markers_, &octomap_, &occupied_, &decision_, &diagnostics_};
+      &rdmap_,        &floor_,     &obstacles_, &markers_,  &octomap_,
+      &octomap_full_, &projected_, &occupied_,  &decision_, &diagnostics_};
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(config_.wait_timeout);
   const auto missing = [&] {
     std::string names;
@@ -188,6 +195,8 @@ void Node::publishFrame(const Frame& frame, const pcl::PointCloud<PointRDM>& clo
 void Node::publishMap(const ros::Time& stamp) {
   const std_msgs::Header odom = header(stamp, config_.odom_frame);
   octomap_.publish(octomapMessage(pipeline_.map().tree(), odom));
+  octomap_full_.publish(octomapFullMessage(pipeline_.map().tree(), odom));
+  projected_.publish(projectedMapMessage(pipeline_.map().tree(), odom));
   occupied_.publish(occupiedCellsMessage(pipeline_.map().tree(), odom));
   map_published_at_ = counts_.processed;
 }
@@ -227,6 +236,7 @@ void Node::publishDiagnostics(bool now, const std::string& state) {
       entry("sigma [px]", str(counts_.last_sigma)),
       entry("obstacle groups", str(counts_.last_groups)),
       entry("decision", counts_.last_decision),
+      entry("camera mount", poses_.mountSource()),
       entry("occupied voxels", str(pipeline_.map().occupiedCount())),
       entry("mean latency, stamp to cloud published [ms]", str(1e3 * counts_.latency_sum / n)),
       entry("mean latency, frame arrival to cloud published [ms]",

@@ -69,7 +69,8 @@ class Node {
   Extractor extractor_;
   RosPoses poses_;
   std::optional<apps::MapRecorder> recorder_;
-  ros::Publisher rdmap_, floor_, obstacles_, markers_, octomap_, occupied_, decision_, diagnostics_;
+  ros::Publisher rdmap_, floor_, obstacles_, markers_, octomap_, octomap_full_, projected_,
+      occupied_, decision_, diagnostics_;
   tf2_ros::TransformBroadcaster tf_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   NodeCounts counts_;

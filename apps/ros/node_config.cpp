@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 namespace multislit::ros_node {
@@ -29,6 +30,26 @@ const std::vector<std::string> kParameters = {"camera",
                                               "wait_for_subscribers",
                                               "wait_timeout",
                                               "diagnostics_period"};
+
+/// The map's fields under octomap_server's parameter names, where they mean the same.
+struct MapParameter {
+  const char* name;   ///< the parameter, octomap_server's
+  const char* field;  ///< OccupancyMapConfig's, as its validate() names it
+  double OccupancyMapConfig::*value;
+};
+const MapParameter kMapParameters[] = {
+    {"resolution", "resolution", &OccupancyMapConfig::resolution},
+    {"sensor_model/hit", "prob_hit", &OccupancyMapConfig::prob_hit},
+    {"sensor_model/miss", "prob_miss", &OccupancyMapConfig::prob_miss},
+    {"sensor_model/min", "clamp_min", &OccupancyMapConfig::clamp_min},
+    {"sensor_model/max", "clamp_max", &OccupancyMapConfig::clamp_max},
+    {"pointcloud_max_z", "max_height", &OccupancyMapConfig::max_height}};
+
+bool isKnown(const std::string& name) {
+  if (std::find(kParameters.begin(), kParameters.end(), name) != kParameters.end()) return true;
+  return std::any_of(std::begin(kMapParameters), std::end(kMapParameters),
+                     [&](const MapParameter& p) { return name == p.name; });
+}
 
 void require(bool ok, const std::string& name, const std::string& rule) {
   if (!ok) throw std::invalid_argument("~" + name + " " + rule);
@@ -62,6 +83,15 @@ void NodeConfig::validate() const {
   require(std::isfinite(wait_timeout) && wait_timeout > 0, "wait_timeout", "must be > 0 s");
   require(std::isfinite(diagnostics_period) && diagnostics_period > 0, "diagnostics_period",
           "must be > 0 s");
+  try {
+    map.validate();
+  } catch (const std::invalid_argument& e) {  // "OccupancyMapConfig.<field> <rule>"
+    const std::string message = e.what();
+    for (const MapParameter& p : kMapParameters)
+      if (message.find(std::string(".") + p.field + " ") != std::string::npos)
+        throw std::invalid_argument("~" + std::string(p.name) + ": " + message);
+    throw;
+  }
 }
 
 NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
@@ -88,6 +118,7 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   read(nh, "wait_for_subscribers", c.wait_for_subscribers, "an integer");
   read(nh, "wait_timeout", c.wait_timeout, "a number");
   read(nh, "diagnostics_period", c.diagnostics_period, "a number");
+  for (const MapParameter& p : kMapParameters) read(nh, p.name, c.map.*p.value, "a number");
   c.validate();
   c.input.frames = static_cast<std::uint64_t>(c.frames);
   c.input.paced = c.realtime;
@@ -101,8 +132,7 @@ std::vector<std::string> unknownParameters(const ros::NodeHandle& nh) {
   for (const std::string& name : names) {
     if (name.rfind(prefix, 0) != 0) continue;
     const std::string own = name.substr(prefix.size());
-    if (std::find(kParameters.begin(), kParameters.end(), own) == kParameters.end())
-      unknown.push_back("~" + own);
+    if (!isKnown(own)) unknown.push_back("~" + own);
   }
   return unknown;
 }

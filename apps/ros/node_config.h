@@ -5,6 +5,8 @@
 
 #include "map_input.h"
 
+#include "multislit/occupancy_map.h"
+
 #include <string>
 #include <vector>
 
@@ -25,12 +27,18 @@ struct NodeConfig {
   /// processed.
   bool realtime = true;
 
-  std::string odom_frame = "odom";                 ///< the map's and the odometry's frame
-  std::string base_frame = "base_link";            ///< the robot on the floor between its feet
+  std::string odom_frame = "odom";  ///< the map's and the odometry's frame
+  /// The robot on the floor midway between its feet, x forward, z up: REP 120's base_footprint
+  /// (base_link is the torso, the robot's to publish).
+  std::string base_frame = "base_footprint";
   std::string camera_frame = "multislit_optical";  ///< x right, y down, z forward
   /// Publish base_frame -> camera_frame (static) from the sensor's mount; false when the robot's
   /// own description already does.
   bool publish_mount_tf = true;
+
+  /// The map under octomap_server's parameter names: ~resolution, ~sensor_model/hit, ~miss, ~min,
+  /// ~max (prob_hit, prob_miss, clamp_min, clamp_max) and ~pointcloud_max_z (max_height).
+  OccupancyMapConfig map;
 
   int map_every = 10;         ///< frames between two map messages (the last frame has one too) [-]
   double pose_timeout = 0.1;  ///< wait at most this for TF or odometry at a frame's stamp [s]

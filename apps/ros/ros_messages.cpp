@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -113,6 +114,56 @@ octomap_msgs::Octomap octomapMessage(const octomap::OcTree& tree, const std_msgs
   const std::string bytes = data.str();
   message.data.assign(bytes.begin(), bytes.end());
   return message;
+}
+
+octomap_msgs::Octomap octomapFullMessage(const octomap::OcTree& tree,
+                                         const std_msgs::Header& header) {
+  octomap_msgs::Octomap message;
+  message.header = header;
+  message.binary = false;
+  message.id = tree.getTreeType();
+  message.resolution = tree.getResolution();
+  std::stringstream data;
+  tree.writeData(data);
+  const std::string bytes = data.str();
+  message.data.assign(bytes.begin(), bytes.end());
+  return message;
+}
+
+nav_msgs::OccupancyGrid projectedMapMessage(const octomap::OcTree& tree,
+                                            const std_msgs::Header& header) {
+  nav_msgs::OccupancyGrid grid;
+  grid.header = header;
+  grid.info.map_load_time = header.stamp;
+  const double res = tree.getResolution();
+  grid.info.resolution = static_cast<float>(res);
+  grid.info.origin.orientation.w = 1.0;
+  if (tree.size() == 0) return grid;  // nothing known: an empty grid
+  double x0, y0, z0, x1, y1, z1;
+  tree.getMetricMin(x0, y0, z0);
+  tree.getMetricMax(x1, y1, z1);
+  // The keys of the first and last voxel columns (the extent's edges lie on voxel faces).
+  const octomap::OcTreeKey lo = tree.coordToKey(x0 + res / 2, y0 + res / 2, z0 + res / 2);
+  const octomap::OcTreeKey hi = tree.coordToKey(x1 - res / 2, y1 - res / 2, z1 - res / 2);
+  grid.info.width = static_cast<std::uint32_t>(hi[0] - lo[0] + 1);
+  grid.info.height = static_cast<std::uint32_t>(hi[1] - lo[1] + 1);
+  grid.info.origin.position.x = tree.keyToCoord(lo[0]) - res / 2;
+  grid.info.origin.position.y = tree.keyToCoord(lo[1]) - res / 2;
+  grid.data.assign(std::size_t{grid.info.width} * grid.info.height, -1);
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const std::int8_t value = tree.isNodeOccupied(*it) ? 100 : 0;
+    // A leaf may be a pruned cube of several voxels: every column under it.
+    const int n = static_cast<int>(std::lround(it.getSize() / res));
+    const octomap::OcTreeKey first = tree.coordToKey(
+        it.getX() - it.getSize() / 2 + res / 2, it.getY() - it.getSize() / 2 + res / 2, it.getZ());
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        std::int8_t& cell = grid.data[std::size_t{grid.info.width} * (first[1] + j - lo[1]) +
+                                      (first[0] + i - lo[0])];
+        cell = std::max(cell, value);
+      }
+  }
+  return grid;
 }
 
 sensor_msgs::PointCloud2 occupiedCellsMessage(const octomap::OcTree& tree,

@@ -10,6 +10,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <multislit_ros/Decision.h>
 #include <multislit_ros/Floor.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <octomap_msgs/Octomap.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
@@ -45,6 +46,17 @@ visualization_msgs::MarkerArray obstacleMarkers(const ObstacleResult& obstacles,
 /// The map as octomap_msgs/Octomap, as octomap_msgs' binaryMapToMsg makes it: binary
 /// (occupied / free per voxel, OcTree::writeBinaryData), id "OcTree", the tree's resolution.
 octomap_msgs::Octomap octomapMessage(const octomap::OcTree& tree, const std_msgs::Header& header);
+
+/// The map as octomap_msgs' fullMapToMsg makes it: not binary (every voxel's occupancy,
+/// OcTree::writeData), id "OcTree", the tree's resolution.
+octomap_msgs::Octomap octomapFullMessage(const octomap::OcTree& tree,
+                                         const std_msgs::Header& header);
+
+/// The map seen from above, as octomap_server's projected_map: one cell per voxel column over the
+/// map's extent, 100 where a voxel of the column is occupied, 0 where one is known and none is
+/// occupied, -1 where none is known.
+nav_msgs::OccupancyGrid projectedMapMessage(const octomap::OcTree& tree,
+                                            const std_msgs::Header& header);
 
 /// The centres of the map's occupied voxels (x, y, z).
 sensor_msgs::PointCloud2 occupiedCellsMessage(const octomap::OcTree& tree,

@@ -26,36 +26,65 @@ Eigen::Isometry3d toEigen(const geometry_msgs::Point& p, const geometry_msgs::Qu
 RosPoses::RosPoses(const NodeConfig& config, const apps::MapInput& in,
                    const PipelineConfig& pipeline, ros::NodeHandle& nh)
     : config_(config) {
-  if (config.poses.choice == "tf") {
+  if (config.poses.choice == "tf" || !config.publish_mount_tf) {
     tf_buffer_ = std::make_unique<tf2_ros::Buffer>(ros::Duration(30.0));
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh);
-  } else if (config.poses.choice == "odom") {
-    odometry_subscriber_ = nh.subscribe("odom", 100, &RosPoses::onOdometry, this);
-  } else {
-    own_.emplace(config.poses, config.input.sequence, in, pipeline);
   }
+  if (config.poses.choice == "odom")
+    odometry_subscriber_ = nh.subscribe("odom", 100, &RosPoses::onOdometry, this);
+  else if (config.poses.choice != "tf")
+    own_.emplace(config.poses, config.input.sequence, in, pipeline);
 }
 
 RosPoses::~RosPoses() = default;
 
 std::string RosPoses::description() const {
   if (own_) return own_->description();
-  if (tf_buffer_) return "TF " + config_.odom_frame + " -> " + config_.base_frame;
+  if (config_.poses.choice == "tf") return "TF " + config_.odom_frame + " -> " + config_.base_frame;
   return "nav_msgs/Odometry on " + odometry_subscriber_.getTopic();
 }
 
 std::optional<PipelineInput> RosPoses::at(const Frame& frame, std::string& why) {
   why.clear();
-  if (tf_buffer_) return fromTf(frame, why);
-  if (!own_) return fromOdometry(frame, why);
-  PoseMiss miss = PoseMiss::None;
-  std::optional<PipelineInput> input = own_->at(frame, miss);
-  if (!input) why = poseMissName(miss);
+  std::optional<PipelineInput> input;
+  if (config_.poses.choice == "tf") {
+    input = fromTf(frame, why);
+  } else if (!own_) {
+    input = fromOdometry(frame, why);
+  } else {
+    PoseMiss miss = PoseMiss::None;
+    input = own_->at(frame, miss);
+    if (!input) why = poseMissName(miss);
+  }
+  if (input && !config_.publish_mount_tf)
+    mountFromTf(pcl_conversions::fromPCL(frame.stamp_us), *input);
   return input;
 }
 
+void RosPoses::mountFromTf(const ros::Time& stamp, PipelineInput& input) {
+  const std::string& base = config_.base_frame;
+  const std::string& camera = config_.camera_frame;
+  try {
+    // At the frame's stamp when TF reaches it (a moving head), else its latest (a fixed mount).
+    const ros::Time at = tf_buffer_->canTransform(base, camera, stamp) ? stamp : ros::Time(0);
+    const geometry_msgs::TransformStamped t = tf_buffer_->lookupTransform(base, camera, at);
+    geometry_msgs::Point p;
+    p.x = t.transform.translation.x;
+    p.y = t.transform.translation.y;
+    p.z = t.transform.translation.z;
+    input.robot_from_camera = toEigen(p, t.transform.rotation);
+    mount_source_ = "TF " + base + " -> " + camera;
+  } catch (const tf2::TransformException& e) {
+    mount_source_ = "sensor file";
+    if (!mount_warned_)
+      ROS_WARN_STREAM("no camera mount " << base << " -> " << camera << " on TF yet (" << e.what()
+                                         << "): the sensor file's mount meanwhile");
+    mount_warned_ = true;
+  }
+}
+
 bool RosPoses::waitForFirst(double timeout) {
-  if (tf_buffer_)
+  if (config_.poses.choice == "tf")
     return tf_buffer_->canTransform(config_.odom_frame, config_.base_frame, ros::Time(0),
                                     ros::Duration(timeout));
   if (own_) return true;

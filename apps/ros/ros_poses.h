@@ -1,6 +1,8 @@
 // The robot's pose at each frame's stamp for the ROS node: from TF (odom_frame -> base_frame),
 // from nav_msgs/Odometry messages (interpolated as an odometry file is), or the node's own poses
 // as `multislit map` makes them (a file, standing still, the gait model, the scenario's motion).
+// With ~publish_mount_tf false the robot publishes the camera's mount (base_frame ->
+// camera_frame): it is looked up in TF at each frame, the sensor file's mount while TF has none.
 #pragma once
 
 #include "map_input.h"
@@ -45,11 +47,15 @@ class RosPoses {
   /// True when the poses are the node's own (not TF or odometry): it publishes them on TF.
   bool own() const { return own_.has_value(); }
   std::string description() const;
+  /// Where the last frame's camera mount came from: "TF <base> -> <camera>" or "sensor file".
+  const std::string& mountSource() const { return mount_source_; }
 
  private:
   std::optional<PipelineInput> fromTf(const Frame& frame, std::string& why);
   std::optional<PipelineInput> fromOdometry(const Frame& frame, std::string& why);
   void onOdometry(const nav_msgs::Odometry::ConstPtr& message);
+  /// input.robot_from_camera from TF at `stamp` (else the latest), when the robot publishes it.
+  void mountFromTf(const ros::Time& stamp, PipelineInput& input);
 
   NodeConfig config_;
   std::optional<apps::MapPoses> own_;
@@ -60,6 +66,8 @@ class RosPoses {
   std::condition_variable arrived_;
   std::deque<OdometrySample> samples_;  ///< the latest odometry, in increasing time
   std::string odometry_warning_;        ///< said once
+  std::string mount_source_ = "sensor file";
+  bool mount_warned_ = false;  ///< that TF has no mount yet, said once
 };
 
 }  // namespace multislit::ros_node

@@ -1,11 +1,14 @@
 // The plane of an RDMap, dk = A u + B v + C (paper eq. 1), as a PCL sample-consensus model.
-// Works with pcl::RandomSampleConsensus, MEstimatorSampleConsensus and LeastMedianSquares (their
-// PointRDM instantiations live in src/pcl_instantiations.cpp).
+// Works with every PCL estimator: RANSAC, LMedS, MSAC, RRANSAC, RMSAC, MLESAC and PROSAC (their
+// PointRDM instantiations live in src/pcl_instantiations.cpp; no PCL_NO_PRECOMPILE needed). Give
+// RRANSAC and RMSAC a pretest of a few points (setFractionNrPretest, in percent): PCL's 10 % never
+// passes on a frame with obstacles, and PCL's RRANSAC then never returns. docs/plane-detector.md.
 #pragma once
 
 #include "multislit/point_types.h"
 
 #include <pcl/point_cloud.h>
+#include <pcl/sample_consensus/mlesac.h>
 #include <pcl/sample_consensus/sac_model.h>
 #include <pcl/types.h>
 
@@ -139,3 +142,18 @@ class SampleConsensusModelRDMapPlane : public pcl::SampleConsensusModel<PointRDM
 };
 
 }  // namespace multislit
+
+// MLESAC's scale for PointRDM clouds. PCL's MLESAC takes its Gaussian sigma as the threshold times
+// the median spread of x, y, z [m] and its outliers as uniform over the bounding box of x, y, z,
+// while this model's distances are residuals along dk [px]. With SampleConsensusModelRDMapPlane,
+// sigma is threshold / 2 [px], so that MLESAC's inliers (within 2 sigma) are the points within the
+// threshold, as for the other estimators, and the outliers are uniform over the span of dk (at
+// least 2 x threshold). Any other model keeps PCL's formulas. Defined in
+// src/pcl_instantiations.cpp.
+template <>
+double pcl::MaximumLikelihoodSampleConsensus<multislit::PointRDM>::computeMedianAbsoluteDeviation(
+    const PointCloudConstPtr& cloud, const IndicesPtr& indices, double sigma) const;
+template <>
+void pcl::MaximumLikelihoodSampleConsensus<multislit::PointRDM>::getMinMax(
+    const PointCloudConstPtr& cloud, const IndicesPtr& indices, Eigen::Vector4f& min_p,
+    Eigen::Vector4f& max_p) const;

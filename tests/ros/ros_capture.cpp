@@ -1,6 +1,7 @@
 #include "ros_capture.h"
 
 #include <nav_msgs/Odometry.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <chrono>
@@ -23,6 +24,8 @@ Capture::Capture(const CaptureOptions& options) : options_(options), spinner_(1,
   listen(floor, ns + "/floor");
   listen(markers, ns + "/obstacle_markers");
   listen(octomap, ns + "/octomap_binary");
+  listen(octomap_full, ns + "/octomap_full");
+  listen(projected, ns + "/projected_map");
   listen(decision, ns + "/decision");
   listen(diagnostics, "/diagnostics");
   listen(tf_static, "/tf_static");
@@ -55,6 +58,22 @@ void Capture::listen(Inbox<M>& inbox, const std::string& topic) {
 /// The robot standing at options_.robot, 100 times a second, on the node's clock (now).
 void Capture::playRobot() {
   tf2_ros::TransformBroadcaster tf;
+  tf2_ros::StaticTransformBroadcaster static_tf;
+  if (options_.mount) {
+    const Eigen::Quaterniond r(options_.mount->rotation());
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = "base_footprint";
+    t.child_frame_id = "multislit_optical";
+    t.transform.translation.x = options_.mount->translation().x();
+    t.transform.translation.y = options_.mount->translation().y();
+    t.transform.translation.z = options_.mount->translation().z();
+    t.transform.rotation.x = r.x();
+    t.transform.rotation.y = r.y();
+    t.transform.rotation.z = r.z();
+    t.transform.rotation.w = r.w();
+    static_tf.sendTransform(t);
+  }
   ros::Publisher odometry;
   if (options_.poses == "odom") odometry = nh_.advertise<nav_msgs::Odometry>("/odom", 100);
   const Eigen::Vector3d p = options_.robot.translation();
@@ -70,7 +89,7 @@ void Capture::playRobot() {
       geometry_msgs::TransformStamped t;
       t.header.stamp = ros::Time::now();
       t.header.frame_id = "odom";
-      t.child_frame_id = "base_link";
+      t.child_frame_id = "base_footprint";
       t.transform.translation.x = p.x();
       t.transform.translation.y = p.y();
       t.transform.translation.z = p.z();
@@ -80,7 +99,7 @@ void Capture::playRobot() {
       nav_msgs::Odometry m;
       m.header.stamp = ros::Time::now();
       m.header.frame_id = "odom";
-      m.child_frame_id = "base_link";
+      m.child_frame_id = "base_footprint";
       m.pose.pose.position.x = p.x();
       m.pose.pose.position.y = p.y();
       m.pose.pose.position.z = p.z();
@@ -104,10 +123,11 @@ std::string Capture::missing() const {
   need(decision.topic, decision.items.size(), n);
   need(tf_static.topic, tf_static.items.size(), 1);
   // The map of the last frame, and the diagnostics said after it.
-  const bool last_map =
-      !rdmap.items.empty() && !octomap.items.empty() && !occupied.items.empty() &&
-      octomap.items.back().message->header.stamp == rdmap.items.back().message->header.stamp &&
-      occupied.items.back().message->header.stamp == rdmap.items.back().message->header.stamp;
+  const auto last = [&](const auto& inbox) {
+    return !rdmap.items.empty() && !inbox.items.empty() &&
+           inbox.items.back().message->header.stamp == rdmap.items.back().message->header.stamp;
+  };
+  const bool last_map = last(octomap) && last(octomap_full) && last(projected) && last(occupied);
   if (!last_map) what += " the map of the last frame;";
   bool finished = false;
   for (const auto& d : diagnostics.items)

@@ -1,11 +1,12 @@
 // What the ROS node test (ros_node_test.cpp) receives from multislit_ros: every message of the
 // node's topics with its time of receipt and the MD5 its publisher announced, while it plays the
-// robot that the node asks for poses (odom -> base_link on TF, or nav_msgs/Odometry).
+// robot that the node asks for poses (odom -> base_footprint on TF, or nav_msgs/Odometry).
 #pragma once
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <multislit_ros/Decision.h>
 #include <multislit_ros/Floor.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <octomap_msgs/Octomap.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
@@ -18,6 +19,7 @@
 #include <atomic>
 #include <cstddef>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -39,10 +41,13 @@ struct Inbox {
 struct CaptureOptions {
   std::string ns = "/multislit";  ///< the node's namespace
   std::size_t frames = 0;         ///< the frames the node processes
-  /// "tf": publish odom -> base_link; "odom": publish nav_msgs/Odometry on /odom; else nothing.
+  /// "tf": publish odom -> base_footprint; "odom": publish nav_msgs/Odometry on /odom; else
+  /// nothing.
   std::string poses = "tf";
   Eigen::Isometry3d robot = Eigen::Isometry3d::Identity();  ///< the robot in odom, standing
-  double timeout = 120.0;                                   ///< for all of the node's messages [s]
+  /// The camera mount the robot publishes on /tf_static (base_footprint -> multislit_optical).
+  std::optional<Eigen::Isometry3d> mount;
+  double timeout = 120.0;  ///< for all of the node's messages [s]
 };
 
 class Capture {
@@ -57,7 +62,8 @@ class Capture {
   Inbox<sensor_msgs::PointCloud2> rdmap, obstacles, occupied;
   Inbox<multislit_ros::Floor> floor;
   Inbox<visualization_msgs::MarkerArray> markers;
-  Inbox<octomap_msgs::Octomap> octomap;
+  Inbox<octomap_msgs::Octomap> octomap, octomap_full;
+  Inbox<nav_msgs::OccupancyGrid> projected;
   Inbox<multislit_ros::Decision> decision;
   Inbox<diagnostic_msgs::DiagnosticArray> diagnostics;
   Inbox<tf2_msgs::TFMessage> tf_static;

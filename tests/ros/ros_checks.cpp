@@ -77,6 +77,10 @@ bool parseOptions(int argc, char** argv) {
         g_options.figure = value;
       else if (key == "--fps")
         g_options.fps = std::stod(value);
+      else if (key == "--resolution")
+        g_options.resolution = std::stod(value);
+      else if (key == "--mount-shift")
+        g_options.mount_shift = std::stod(value);
       else if (key == "--timeout")
         g_options.timeout = std::stod(value);
       else
@@ -98,6 +102,8 @@ CaptureOptions captureOptions() {
   c.poses = g_options.poses;
   c.robot = g_options.robot;
   c.timeout = g_options.timeout;
+  if (g_options.mount_shift != 0.0)
+    c.mount = Eigen::Translation3d(g_options.mount_shift, 0.0, 0.0) * expected().base_from_camera;
   return c;
 }
 
@@ -188,7 +194,10 @@ const SceneObject* objectUnder(const Scenario& scenario, const Eigen::Isometry3d
 std::unique_ptr<octomap::OcTree> decodeOctomap(const octomap_msgs::Octomap& message) {
   auto tree = std::make_unique<octomap::OcTree>(message.resolution);
   std::stringstream data(std::string(message.data.begin(), message.data.end()));
-  tree->readBinaryData(data);
+  if (message.binary)
+    tree->readBinaryData(data);
+  else
+    tree->readData(data);
   return tree;
 }
 
@@ -208,7 +217,8 @@ std::vector<Eigen::Vector3d> occupiedCentres(const octomap::OcTree& tree) {
 std::optional<Eigen::Isometry3d> baseFromCamera() {
   for (const auto& item : capture().tf_static.items)
     for (const geometry_msgs::TransformStamped& t : item.message->transforms) {
-      if (t.header.frame_id != "base_link" || t.child_frame_id != "multislit_optical") continue;
+      if (t.header.frame_id != "base_footprint" || t.child_frame_id != "multislit_optical")
+        continue;
       const auto& q = t.transform.rotation;
       Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
       pose.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).toRotationMatrix();
@@ -229,7 +239,7 @@ void writeFigure(const std::string& path) {
   const std::size_t groups = groupBoxes(markers).size();
   char title[200];
   std::snprintf(title, sizeof title,
-                "multislit_ros on the simulator (%s), frame %zu, fixed frame base_link:\n"
+                "multislit_ros on the simulator (%s), frame %zu, fixed frame base_footprint:\n"
                 "/multislit/rdmap (points) and /multislit/obstacle_markers (%zu groups)",
                 g_options.scenario.c_str(), capture().rdmap.items.size() - 1, groups);
   const cv::Mat image = renderView(rdmapCloud(cloud), markers,

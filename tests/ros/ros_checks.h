@@ -4,6 +4,7 @@
 
 #include "ros_capture.h"
 
+#include "multislit/occupancy_map.h"
 #include "multislit/point_types.h"
 #include "multislit/sim/scenarios.h"
 
@@ -28,13 +29,17 @@ struct TestOptions {
   Eigen::Isometry3d robot = Eigen::Isometry3d::Identity();  ///< where the odometry says it is
   std::string node_out;                                     ///< the node's ~out folder
   std::string map_out;                                      ///< `multislit map` on the same frames
-  std::string figure;      ///< a PNG of the last frame as a viewer shows it
-  double fps = 30.0;       ///< the node's ~fps [Hz]
+  std::string figure;  ///< a PNG of the last frame as a viewer shows it
+  double fps = 30.0;   ///< the node's ~fps [Hz]
+  double resolution = OccupancyMapConfig{}.resolution;  ///< the node's ~resolution [m]
+  /// Not 0: the robot publishes the camera mount on TF (the node's ~publish_mount_tf false), the
+  /// sensor's with the camera this much further forward [m].
+  double mount_shift = 0.0;
   double timeout = 120.0;  ///< for the whole run [s]
 };
 
 /// Reads --scenario, --frames, --poses, --robot X,Y,YAW_DEG, --node-out, --map-out, --figure,
-/// --fps and --timeout; false (said on stderr) when they are wrong.
+/// --fps, --resolution, --mount-shift and --timeout; false (said on stderr) when they are wrong.
 bool parseOptions(int argc, char** argv);
 const TestOptions& options();
 CaptureOptions captureOptions();
@@ -63,12 +68,13 @@ std::vector<visualization_msgs::Marker> groupBoxes(const visualization_msgs::Mar
 const SceneObject* objectUnder(const Scenario& scenario, const Eigen::Isometry3d& world_from_frame,
                                const Eigen::Vector3d& p, double margin);
 
-/// octomap_msgs' binary map read back as octomap_msgs' conversions do (readBinaryData).
+/// octomap_msgs' map read back as octomap_msgs' conversions do (readBinaryData, or readData for a
+/// full map).
 std::unique_ptr<octomap::OcTree> decodeOctomap(const octomap_msgs::Octomap& message);
 /// The centres of the occupied leaves, sorted.
 std::vector<Eigen::Vector3d> occupiedCentres(const octomap::OcTree& tree);
 
-/// base_link -> multislit_optical from /tf_static.
+/// base_footprint -> multislit_optical from /tf_static.
 std::optional<Eigen::Isometry3d> baseFromCamera();
 /// The last frame's cloud and boxes as a viewer shows them (ros_view.h).
 void writeFigure(const std::string& path);

@@ -91,6 +91,7 @@ checked_run() {
   rc=$?
   cat "$work/${name}_check.log"
   ((rc == 0)) || fail "ros_node_test on $name (rc $rc); the node said: $(tail -20 "$work/${name}_node.log")"
+  [[ -z ${after_check:-} ]] || $after_check
   # Shut down (Ctrl-C), the node ends cleanly: rc 0 and, under ASan, no leak.
   stop $node
   rc=$?
@@ -105,23 +106,58 @@ checked_run() {
 
 # 2. The launch file, TF poses, a bag.
 topics=(/multislit/rdmap /multislit/floor /multislit/obstacles /multislit/obstacle_markers
-  /multislit/octomap_binary /multislit/octomap_point_cloud_centers /multislit/decision
-  /diagnostics /tf /tf_static)
+  /multislit/octomap_binary /multislit/octomap_full /multislit/projected_map
+  /multislit/octomap_point_cloud_centers /multislit/decision /diagnostics /tf /tf_static)
 rosbag record -O "$work/run.bag" "${topics[@]}" >"$work/rosbag.log" 2>&1 &
 bag=$!
 pids+=($bag)
 checked_run ball --scenario ball --frames 30 --poses tf --node-out "$work/node_ball" \
   --map-out "$work/map" -- roslaunch multislit_ros multislit.launch simulate:=ball frames:=30 \
-  poses:=tf pose_timeout:=1.0 out:="$work/node_ball" wait_for_subscribers:=2
+  poses:=tf pose_timeout:=1.0 out:="$work/node_ball" wait_for_subscribers:=2 resolution:=0.01
 stop $bag
 
-# 3. The program alone, odometry poses, the picture.
-checked_run fig8 --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 \
-  --figure "$work/ros_view.png" -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 \
-  _poses:=odom _pose_timeout:=1.0 _wait_for_subscribers:=1
-[[ -s $work/ros_view.png ]] || fail "no picture"
+# rospy reads the node's messages (genpy's modules in the package's python/): rostopic echo prints
+# the latched floor and decision of the last frame.
+echo_messages() {
+  local topic
+  for topic in floor decision; do
+    PYTHONPATH=$package/python${PYTHONPATH:+:$PYTHONPATH} timeout 120 rostopic echo -n 1 \
+      "/multislit/$topic" >"$work/echo_$topic.txt" 2>&1 ||
+      fail "rostopic echo /multislit/$topic: $(tail -3 "$work/echo_$topic.txt")"
+  done
+  grep -q '^  frame_id: "multislit_optical"' "$work/echo_floor.txt" &&
+    grep -q "^found: True" "$work/echo_floor.txt" &&
+    grep -q "^valid_points: [1-9]" "$work/echo_floor.txt" ||
+    fail "rostopic echo /multislit/floor: $(cat "$work/echo_floor.txt")"
+  grep -q '^  frame_id: "base_footprint"' "$work/echo_decision.txt" &&
+    grep -qE '^command_name: "(walk|turn|stop)"' "$work/echo_decision.txt" ||
+    fail "rostopic echo /multislit/decision: $(cat "$work/echo_decision.txt")"
+  echo "rostopic echo: the floor and the decision of the last frame"
+}
 
-# 4. The bag.
+# 3. The program alone: odometry poses, the map's parameters, the picture.
+after_check=echo_messages checked_run fig8 --scenario fig8 --frames 8 --poses odom \
+  --robot 1.0,0.5,90 --resolution 0.02 --figure "$work/ros_view.png" -- \
+  "$package/multislit_ros" _simulate:=fig8 _frames:=8 _poses:=odom _pose_timeout:=1.0 \
+  _wait_for_subscribers:=1 _resolution:=0.02 _sensor_model/hit:=0.9 _sensor_model/miss:=0.45 \
+  _sensor_model/min:=0.1 _sensor_model/max:=0.95 _pointcloud_max_z:=0.25
+[[ -s $work/ros_view.png ]] || fail "no picture"
+grep -q "unknown parameter" "$work/fig8_node.log" &&
+  fail "fig8: octomap_server's parameters were not known: $(grep "unknown parameter" "$work/fig8_node.log")"
+
+# 4. The robot publishes the camera mount on TF, 0.3 m further forward than the sensor's: the node
+# takes it (the picture above keeps the sensor's).
+checked_run mount --scenario fig8 --frames 8 --poses odom --robot 1.0,0.5,90 --resolution 0.02 \
+  --mount-shift 0.3 -- "$package/multislit_ros" _simulate:=fig8 _frames:=8 _poses:=odom \
+  _pose_timeout:=1.0 _wait_for_subscribers:=1 _resolution:=0.02 _publish_mount_tf:=false
+# octomap_server's parameters are checked by OccupancyMapConfig::validate(), named (the last run:
+# the parameter stays on the server).
+"$package/multislit_ros" _simulate:=fig8 _sensor_model/hit:=0.3 >"$work/bad_param.log" 2>&1 &&
+  fail "~sensor_model/hit 0.3 was taken"
+grep -q "~sensor_model/hit: OccupancyMapConfig.prob_hit must be in (0.5, 1)" "$work/bad_param.log" ||
+  fail "~sensor_model/hit 0.3: $(tail -3 "$work/bad_param.log")"
+
+# 5. The bag.
 rosbag info "$work/run.bag" >"$work/bag_info.txt" 2>&1 || fail "rosbag info: $(cat "$work/bag_info.txt")"
 cat "$work/bag_info.txt"
 for topic in "${topics[@]}"; do
@@ -132,4 +168,17 @@ done
 grep -q "/multislit/rdmap  *30 msgs" "$work/bag_info.txt" || fail "the bag has not the 30 clouds"
 grep -q "octomap_msgs/Octomap  *\[9a45536b45c5e409cd49f04bb2d9999f\]" "$work/bag_info.txt" ||
   fail "the bag's octomap_msgs/Octomap is not upstream's"
+# 6. The package's rviz view shows only topics the node published (the bag holds them).
+/usr/bin/python3 - "$package/rviz/multislit.rviz" "$work/bag_info.txt" <<'EOF' || fail "rviz/multislit.rviz"
+import sys, yaml
+config = yaml.safe_load(open(sys.argv[1]))
+manager = config["Visualization Manager"]
+assert manager["Global Options"]["Fixed Frame"] == "base_footprint", "fixed frame"
+topics = [d.get("Topic") or d.get("Marker Topic") for d in manager["Displays"]]
+topics = [t for t in topics if t]
+recorded = open(sys.argv[2]).read().split()
+missing = [t for t in topics if t not in recorded]
+assert len(topics) == 4 and not missing, f"topics {topics}, not published: {missing}"
+print(f"rviz/multislit.rviz: fixed frame base_footprint, {len(topics)} topics, all published")
+EOF
 echo "ros_node: all checks passed in $(since "$t_start")"

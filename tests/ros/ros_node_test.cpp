@@ -111,7 +111,7 @@ TEST(RosNode, PublishesOneBoxPerObstacleGroupWithItsSize) {
     for (const pcl::PointXYZL& p : labelledCloud(*clouds[i].message)) labels.insert(p.label);
     EXPECT_EQ(boxes.size(), labels.size()) << "frame " << i;
     for (const auto& box : boxes) {
-      EXPECT_EQ(box.header.frame_id, "base_link");
+      EXPECT_EQ(box.header.frame_id, "base_footprint");
       EXPECT_GT(box.scale.x, 0.0);
       EXPECT_GT(box.scale.y, 0.0);
       EXPECT_GT(box.scale.z, 0.0);
@@ -129,7 +129,10 @@ TEST(RosNode, GroupsAreTheScenariosObjectsWithTheirHeights) {
   const auto& arrays = capture().markers.items;
   for (std::size_t i = 0; i < arrays.size(); ++i) {
     for (const auto& box : groupBoxes(*arrays[i].message)) {
-      const Eigen::Vector3d centre(box.pose.position.x, box.pose.position.y, 0.0);
+      // With the robot's mount on TF the camera is mount_shift further forward than it is: the
+      // groups come that much further ahead.
+      const Eigen::Vector3d centre(box.pose.position.x - options().mount_shift, box.pose.position.y,
+                                   0.0);
       const SceneObject* object = objectUnder(scenario, scenario.worldFromRobot(i), centre, 0.01);
       ASSERT_NE(object, nullptr) << "frame " << i << ": a group at " << centre.transpose()
                                  << " where the scene has no object";
@@ -148,7 +151,7 @@ TEST(RosNode, PublishesTheOctomapWithUpstreamsChecksum) {
     EXPECT_EQ(item.md5, kOctomapMd5);  // what the node's connection announced
     EXPECT_TRUE(item.message->binary);
     EXPECT_EQ(item.message->id, "OcTree");
-    EXPECT_DOUBLE_EQ(item.message->resolution, 0.01);
+    EXPECT_DOUBLE_EQ(item.message->resolution, options().resolution);  // ~resolution
     EXPECT_EQ(item.message->header.frame_id, "odom");
   }
 }
@@ -174,6 +177,66 @@ TEST(RosNode, MapDecodesIntoTheOccupiedVoxelsOfItsCloud) {
   }
   // The robot stands: nothing sweeps the floor, so the map holds nothing (docs/walk.md, "Evidence
   // over the sweep"); the decoding is compared on whatever the maps hold.
+}
+
+// octomap_full: every voxel's occupancy; the binary map is its maximum likelihood.
+TEST(RosNode, FullMapIsTheBinaryMapWithItsProbabilities) {
+  const auto& full = capture().octomap_full.items;
+  const auto& binary = capture().octomap.items;
+  ASSERT_EQ(full.size(), binary.size());
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    EXPECT_EQ(full[i].md5, kOctomapMd5);
+    EXPECT_FALSE(full[i].message->binary);
+    EXPECT_EQ(full[i].message->id, "OcTree");
+    EXPECT_DOUBLE_EQ(full[i].message->resolution, options().resolution);
+    EXPECT_EQ(full[i].message->header.stamp, binary[i].message->header.stamp);
+    const auto tree = decodeOctomap(*full[i].message);
+    const auto likely = decodeOctomap(*binary[i].message);
+    EXPECT_EQ(tree->size() > 0, likely->size() > 0) << "map " << i;
+    std::size_t leaves = 0;
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it, ++leaves) {
+      const octomap::OcTreeNode* node = likely->search(it.getCoordinate());
+      ASSERT_NE(node, nullptr) << "map " << i << ": a voxel only the full map knows";
+      EXPECT_EQ(tree->isNodeOccupied(*it), likely->isNodeOccupied(node)) << "map " << i;
+      EXPECT_GT(it->getOccupancy(), 0.0);
+      EXPECT_LT(it->getOccupancy(), 1.0);
+    }
+    EXPECT_EQ(occupiedCentres(*tree), occupiedCentres(*likely)) << "map " << i;
+  }
+}
+
+// projected_map: each column of the last map seen from above, looked up voxel by voxel.
+TEST(RosNode, ProjectedMapIsTheLastMapSeenFromAbove) {
+  ASSERT_FALSE(capture().projected.items.empty());
+  const nav_msgs::OccupancyGrid& grid = *capture().projected.items.back().message;
+  const auto tree = decodeOctomap(*capture().octomap_full.items.back().message);
+  EXPECT_EQ(grid.header.frame_id, "odom");
+  EXPECT_FLOAT_EQ(grid.info.resolution, static_cast<float>(options().resolution));
+  ASSERT_EQ(grid.data.size(), std::size_t{grid.info.width} * grid.info.height);
+  ASSERT_EQ(tree->size() > 0, !grid.data.empty());
+  if (grid.data.empty()) return;
+  double x0, y0, z0, x1, y1, z1;
+  tree->getMetricMin(x0, y0, z0);
+  tree->getMetricMax(x1, y1, z1);
+  const double res = grid.info.resolution;
+  std::size_t known = 0;
+  for (std::uint32_t row = 0; row < grid.info.height; ++row)
+    for (std::uint32_t col = 0; col < grid.info.width; ++col) {
+      const double x = grid.info.origin.position.x + (col + 0.5) * res;
+      const double y = grid.info.origin.position.y + (row + 0.5) * res;
+      int expected = -1;
+      for (double z = z0 + res / 2; z < z1; z += res)
+        if (const octomap::OcTreeNode* node = tree->search(x, y, z))
+          expected = std::max(expected, tree->isNodeOccupied(node) ? 100 : 0);
+      EXPECT_EQ(grid.data[std::size_t{row} * grid.info.width + col], expected)
+          << "cell " << col << ", " << row;
+      known += expected >= 0;
+    }
+  EXPECT_GT(known, 0u);
+  EXPECT_NEAR(grid.info.origin.position.x, x0, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.y, y0, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.x + grid.info.width * res, x1, res / 2);
+  EXPECT_NEAR(grid.info.origin.position.y + grid.info.height * res, y1, res / 2);
 }
 
 TEST(RosNode, MapOfAStandingRobotHoldsNothingWhereverTheOdometryPutsIt) {
@@ -250,13 +313,18 @@ TEST(RosNode, ReportsFpsDroppedFramesAndTheFloorInDiagnostics) {
   EXPECT_EQ(diagnosticValue(*finished, "frames processed"), std::to_string(options().frames));
   EXPECT_EQ(diagnosticValue(*finished, "dropped frames"), "0");
   EXPECT_EQ(diagnosticValue(*finished, "found floor"), "true");
+  EXPECT_EQ(
+      diagnosticValue(*finished, "camera mount"),
+      options().mount_shift != 0.0 ? "TF base_footprint -> multislit_optical" : "sensor file");
   EXPECT_EQ(finished->level, diagnostic_msgs::DiagnosticStatus::OK);
 }
 
-TEST(RosNode, PublishesTheCameraMountFromTheSensorOnTf) {
+// The sensor file's mount, published by the node; or the robot's, which the node takes.
+TEST(RosNode, TheCameraMountOnTfIsTheSensorsOrTheRobots) {
   const std::optional<Eigen::Isometry3d> mount = baseFromCamera();
   ASSERT_TRUE(mount.has_value());
-  const Eigen::Isometry3d expected_mount = expected().base_from_camera;
+  const Eigen::Isometry3d expected_mount =
+      captureOptions().mount.value_or(expected().base_from_camera);
   EXPECT_LT((mount->translation() - expected_mount.translation()).norm(), 1e-6);
   EXPECT_LT((mount->linear() - expected_mount.linear()).norm(), 1e-6);
 }

@@ -53,7 +53,7 @@ void drawGrid(cv::Mat& image, const Viewer& view) {
   const cv::Scalar grey(110, 110, 110);
   for (double x = 0.0; x <= 0.601; x += 0.05) view.line(image, {x, -0.35, 0}, {x, 0.45, 0}, grey);
   for (double y = -0.35; y <= 0.451; y += 0.05) view.line(image, {0.0, y, 0}, {0.6, y, 0}, grey);
-  // base_link's axes, as rviz draws them: x red, y green, z blue (0.1 m)
+  // base_footprint's axes, as rviz draws them: x red, y green, z blue (0.1 m)
   view.line(image, {0, 0, 0}, {0.1, 0, 0}, cv::Scalar(0, 0, 255), 3);
   view.line(image, {0, 0, 0}, {0, 0.1, 0}, cv::Scalar(0, 255, 0), 3);
   view.line(image, {0, 0, 0}, {0, 0, 0.1}, cv::Scalar(255, 0, 0), 3);

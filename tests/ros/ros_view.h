@@ -1,4 +1,4 @@
-// A picture of what a viewer (rviz, fixed frame base_link) shows of the node's messages: the
+// A picture of what a viewer (rviz, fixed frame base_footprint) shows of the node's messages: the
 // RDMap cloud in perspective coloured by height above the floor, the floor's grid, and the
 // obstacle groups' boxes and sizes from the markers. For docs/ros.md, and to look at a run.
 #pragma once

@@ -1,0 +1,7 @@
+#include "simulated_input.h"
+
+namespace multislit::ros_node {
+
+apps::SimulatedInputOpener simulatedInput() { return {}; }
+
+}  // namespace multislit::ros_node
