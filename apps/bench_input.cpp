@@ -2,6 +2,7 @@
 #include "bench_input.h"
 
 #include "common.h"
+#include "output_file.h"
 
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
@@ -69,7 +70,7 @@ BenchInput renderBenchInput(const std::string& scenario, long frames, double ste
   in.sensor.mount = s.mount;
   cli::Progress progress(static_cast<std::size_t>(frames),
                          "render x" + std::to_string(scale) + " " + s.name);
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const auto frame = static_cast<std::uint64_t>(k);
     in.world_from_camera.push_back(s.worldFromRobot(frame) * in.robot_from_camera);
     in.images.push_back(sim.render(s.scene, in.world_from_camera.back(), frame).image);

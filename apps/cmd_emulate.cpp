@@ -13,6 +13,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -215,8 +216,8 @@ int runEmulate(int argc, char** argv) {
     throw cli::UsageError("--ahead needs --walk: a scenario's frames are all made before serving");
 
   RenderConfig render;
-  render.seed = static_cast<uint64_t>(args.integer("seed"));
-  render.bit_depth = static_cast<int>(args.integer("bit-depth"));
+  render.seed = static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()));
+  render.bit_depth = static_cast<int>(args.integer("bit-depth", 8, 16));
   render.noise = !args.has("no-noise");
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};

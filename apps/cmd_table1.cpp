@@ -37,7 +37,7 @@ FloorNoise measureFloorNoise(const Simulator& sim, const Extractor& extractor, c
   const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(mount);
   std::vector<double> stds;
   double points = 0;
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const RenderedFrame f = sim.render(floor, pose, static_cast<uint64_t>(cond * 100000 + k));
     pcl::PointCloud<PointRDM> cloud;
     extractor.extract(f.image, cloud);
@@ -87,6 +87,7 @@ int runTable1(int argc, char** argv) {
   args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
   args.option("out", "out/table1", "output folder");
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C: nothing is written (a table of fewer poses is no Table I)
   const long frames = args.integer("frames", 1, 1000000);
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
@@ -107,7 +108,7 @@ int runTable1(int argc, char** argv) {
   std::vector<double> means, spreads;
   cli::Progress progress(static_cast<std::size_t>(7 * frames), "table1");
   std::vector<std::string> rows;
-  for (int cond = 0; cond <= 6; ++cond) {
+  for (int cond = 0; cond <= 6 && !StopSignal::requested(); ++cond) {
     const MountConfig mount = tableIPose(cond);
     const FloorNoise noise =
         measureFloorNoise(sim, extractor, ref_scene.scene, mount, cond, frames, progress);
@@ -124,6 +125,10 @@ int runTable1(int argc, char** argv) {
     rows.push_back(row);
   }
   progress.finish();
+  if (StopSignal::requested()) {
+    std::printf("table1: interrupted (Ctrl-C or SIGTERM): nothing written\n");
+    return kInterruptedExit;
+  }
   csv_file.commit();
   reportTable1(out, frames, rows, labels, means, spreads);
   return 0;

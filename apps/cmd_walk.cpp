@@ -339,7 +339,8 @@ int runWalk(int argc, char** argv) {
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
-    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor);
+    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor,
+                      std::vector<std::string>{args.str("sensor"), args.str("photometry")});
   }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
   for (long k = 0; k < frames && !StopSignal::requested(); ++k) {

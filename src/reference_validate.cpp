@@ -4,11 +4,13 @@
 #include "multislit/reference.h"
 
 #include "multislit/image_file.h"
+#include "multislit/sensor.h"
 
 #include "config_check.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -18,6 +20,17 @@ namespace multislit {
 using detail::require;
 
 namespace {
+
+/// Farthest a reference point may lie [m]: the plane a reference is taken of is a floor or a wall
+/// near the sensor.
+constexpr double kMaxReferenceDepth = 100.0;
+
+/// `v` in at most 4 significant digits (1e+308, not 309 digits).
+std::string brief(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", v);
+  return text;
+}
 
 /// Rows of slit `s` as [first, last], in 64 bits (a corrupt first_row must not overflow).
 long long lastRowOf(const ReferenceSlit& s) {
@@ -64,6 +77,42 @@ void validateSpacing(const Reference& ref, std::size_t k) {
               std::to_string(closest) + " px): the same slit twice, or regions that overlap");
 }
 
+/// The metric scale describes a real sensor (a calibration file can be edited): f of a real lens,
+/// the principal point inside the image, a baseline of 1 mm to kMaxBaseline, and every reference
+/// point in front of the sensor within kMaxReferenceDepth. Else rdmap wrote points at +-inf and
+/// map decided on them.
+void validateScale(const Reference& ref) {
+  const MetricScale& s = ref.scale;
+  require(std::isfinite(s.f) && s.f >= 0, "scale.f", "must be finite and >= 0 px");
+  require(std::isfinite(s.cx) && std::isfinite(s.cy), "scale.cx", "and cy must be finite");
+  require(std::isfinite(s.disparity_constant) && s.disparity_constant >= 0,
+          "scale.disparity_constant", "must be finite and >= 0 px m");
+  require(s.source == "none" || s.valid(), "scale.f",
+          "and disparity_constant must be > 0 when scale.source is '" + s.source + "'");
+  if (s.f == 0 && s.disparity_constant == 0) return;  // no metric scale
+  require(s.f >= kMinFocalPx && s.f <= kMaxFocalPx, "scale.f",
+          "must be in [1, 1e6] px (a real lens), not " + brief(s.f));
+  require(s.cx >= -0.5 && s.cx <= ref.image_width - 0.5, "scale.cx",
+          "must lie inside the image (-0.5 .. " + std::to_string(ref.image_width) + " - 0.5 px)");
+  require(s.cy >= -0.5 && s.cy <= ref.image_height - 0.5, "scale.cy",
+          "must lie inside the image (-0.5 .. " + std::to_string(ref.image_height) + " - 0.5 px)");
+  const double baseline = s.disparity_constant / s.f;
+  require(baseline >= 1e-3 && baseline <= kMaxBaseline, "scale.disparity_constant",
+          "over f (the baseline) must be in [0.001, 1] m, not " + brief(baseline) + " m");
+  for (std::size_t k = 0; k < ref.slits.size(); ++k) {
+    const ReferenceSlit& slit = ref.slits[k];
+    for (std::size_t j = 0; j < slit.u_inf.size() && j < slit.u.size(); ++j) {
+      if (!std::isfinite(slit.u[j]) || !std::isfinite(slit.u_inf[j])) continue;
+      const double depth = s.disparity_constant / (double(slit.u[j]) - slit.u_inf[j]);
+      require(depth > 0 && depth <= kMaxReferenceDepth,
+              "slits[" + std::to_string(k) + "].u_inf[" + std::to_string(j) + "]",
+              "with scale.disparity_constant puts the reference point at " + brief(depth) +
+                  " m: it must be in front of the sensor, within " +
+                  std::to_string(static_cast<int>(kMaxReferenceDepth)) + " m");
+    }
+  }
+}
+
 }  // namespace
 
 void Reference::validate() const {
@@ -81,12 +130,7 @@ void Reference::validate() const {
           "must be 0 (the image type's) or in [1, 65535] DN");
   require(std::isfinite(smoothing_rms) && smoothing_rms >= 0, "smoothing_rms",
           "must be finite and >= 0 px");
-  require(std::isfinite(scale.f) && scale.f >= 0, "scale.f", "must be finite and >= 0 px");
-  require(std::isfinite(scale.cx) && std::isfinite(scale.cy), "scale.cx", "and cy must be finite");
-  require(std::isfinite(scale.disparity_constant) && scale.disparity_constant >= 0,
-          "scale.disparity_constant", "must be finite and >= 0 px m");
-  require(scale.source == "none" || scale.valid(), "scale.f",
-          "and disparity_constant must be > 0 when scale.source is '" + scale.source + "'");
+  validateScale(*this);
   require(!slits.empty() && slits.size() <= 256, "slits", "must hold 1 .. 256 slits");
   for (std::size_t k = 0; k < slits.size(); ++k) validateSlit(*this, k);
   for (std::size_t k = 1; k < slits.size(); ++k) validateSpacing(*this, k);
