@@ -93,9 +93,7 @@ Photometry photometryFromArgs(const cli::ArgParser& args, uint64_t seed, Scene& 
 /// The ground truth of a frame, whole or absent.
 void writeGroundTruth(const std::filesystem::path& path, const std::vector<SlitCrossing>& truth,
                       const Scene& scene) {
-  writeWhole(
-      path, [&](const std::string& p) { writeGroundTruthCsv(p, truth, scene); },
-      [](const std::string&) {});  // writeGroundTruthCsv checks its writes itself
+  writeWhole(path, [&](const std::string& p) { writeGroundTruthCsv(p, truth, scene); });
 }
 
 // The sequence: frame_NNNNNN.png and .csv (ground truth) per frame, frames.csv (index and

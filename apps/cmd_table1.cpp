@@ -56,8 +56,9 @@ FloorNoise measureFloorNoise(const Simulator& sim, const Extractor& extractor, c
 }
 
 // The table (`rows`, one per condition) on stdout and Fig. 12 (fig12.png in `out`): the mean
-// residual std per condition with its spread.
-void reportTable1(const std::filesystem::path& out, long frames,
+// residual std per condition with its spread; then `csv` (table1.csv) is committed: both files
+// or neither.
+void reportTable1(const std::filesystem::path& out, OutputFile& csv, long frames,
                   const std::vector<std::string>& rows, const std::vector<std::string>& labels,
                   const std::vector<double>& means, const std::vector<double>& spreads) {
   std::printf("%-10s %6s %6s %6s %8s %13s\n", "condition", "theta", "phi", "h", "points",
@@ -67,6 +68,7 @@ void reportTable1(const std::filesystem::path& out, long frames,
       (out / "fig12.png").string(),
       "Fig. 12: floor residual std per Table I pose (" + std::to_string(frames) + " frames each)",
       "std [px]", labels, means, spreads);
+  csv.commit();
   const auto [lo, hi] = std::minmax_element(means.begin(), means.end());
   std::printf("max / min over the conditions: %.2f (the paper: almost constant)\nwrote %s and %s\n",
               *hi / *lo, (out / "table1.csv").string().c_str(),
@@ -129,8 +131,7 @@ int runTable1(int argc, char** argv) {
     std::printf("table1: interrupted (Ctrl-C or SIGTERM): nothing written\n");
     return kInterruptedExit;
   }
-  csv_file.commit();
-  reportTable1(out, frames, rows, labels, means, spreads);
+  reportTable1(out, csv_file, frames, rows, labels, means, spreads);
   return 0;
 }
 

@@ -303,7 +303,7 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
     r.top.objects.push_back(rec.object);
     r.top.object_notes.push_back(note);
   }
-  walk.map().save((out / "map.bt").string());
+  writeWhole(out / "map.bt", [&walk](const std::string& p) { walk.map().save(p); });
   drawTopView((out / "map_top.png").string(), walk.map(), r.top);
 }
 

@@ -7,8 +7,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace multislit::apps {
 
@@ -21,15 +23,19 @@ std::ofstream openCsv(const std::filesystem::path& path, const char* header) {
   return csv;
 }
 
-/// Closes a file written row by row (live, for `tail -f`); one that could not be written whole
-/// is removed, not left cut.
-void checkWritten(std::ofstream& csv, const std::filesystem::path& path) {
-  csv.close();
-  if (!csv) {
+/// Closes the files written row by row (live, for `tail -f`); those that could not be written
+/// whole are removed, not left cut, and the first is named in the error.
+void checkWritten(std::initializer_list<std::pair<std::ofstream*, std::filesystem::path>> files) {
+  std::string failed;
+  for (const auto& [csv, path] : files) {
+    csv->close();
+    if (*csv) continue;
     std::error_code ignored;
     std::filesystem::remove(path, ignored);
-    throw std::runtime_error("could not write all of " + path.string() + " (disk full?)");
+    if (failed.empty()) failed = path.string();
   }
+  if (!failed.empty())
+    throw std::runtime_error("could not write all of " + failed + " (disk full?)");
 }
 
 }  // namespace
@@ -100,12 +106,9 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
 
 std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& heading,
                                 double seconds, bool interrupted) {
-  checkWritten(frames_csv_, out_ / "decisions.csv");
-  checkWritten(groups_csv_, out_ / "obstacles.csv");
+  checkWritten({{&frames_csv_, out_ / "decisions.csv"}, {&groups_csv_, out_ / "obstacles.csv"}});
   const OccupancyMap& map = pipeline.map();
-  writeWhole(
-      out_ / "map.bt", [&map](const std::string& p) { map.save(p); },
-      [](const std::string&) {});  // save() checks its writes itself
+  writeWhole(out_ / "map.bt", [&map](const std::string& p) { map.save(p); });
   TopViewContent top;
   top.path = path_;
   drawTopView((out_ / "map_top.png").string(), map, top);

@@ -56,6 +56,12 @@ void writeWhole(const std::filesystem::path& path, Save save, Check check) {
   file.commit();
 }
 
+/// The same with a writer that checks its own writes (throws when one fails).
+template <typename Save>
+void writeWhole(const std::filesystem::path& path, Save save) {
+  writeWhole(path, save, [](const std::string&) {});
+}
+
 /// odometry.csv, whole or absent (read back before it is renamed into place).
 void writeOdometry(const std::filesystem::path& path, const std::vector<OdometrySample>& samples);
 
