@@ -8,12 +8,15 @@
 
 #include "config_check.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace multislit {
 
@@ -24,6 +27,8 @@ namespace {
 /// Farthest a reference point may lie [m]: the plane a reference is taken of is a floor or a wall
 /// near the sensor.
 constexpr double kMaxReferenceDepth = 100.0;
+/// Farthest the reference points may lie off one plane: rms over their median depth [-].
+constexpr double kMaxPlaneRms = 0.05;
 
 /// `v` in at most 4 significant digits (1e+308, not 309 digits).
 std::string brief(double v) {
@@ -113,6 +118,39 @@ void validateScale(const Reference& ref) {
   }
 }
 
+/// The reference points in 3D (MetricScale's equations) lie on one plane, as the plane they were
+/// taken of: their rms distance from the plane fitted to them may be at most kMaxPlaneRms of
+/// their median depth. A file whose u_inf, scale or slits were edited apart is refused.
+void validatePlane(const Reference& ref) {
+  const MetricScale& s = ref.scale;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> depths;
+  for (const ReferenceSlit& slit : ref.slits)
+    for (std::size_t j = 0; j < slit.u.size() && j < slit.u_inf.size(); ++j) {
+      if (!std::isfinite(slit.u[j]) || !std::isfinite(slit.u_inf[j])) continue;
+      const double z = s.disparity_constant / (double(slit.u[j]) - slit.u_inf[j]);
+      const double v = slit.first_row + static_cast<double>(j);
+      points.emplace_back((slit.u[j] - s.cx) * z / s.f, (v - s.cy) * z / s.f, z);
+      depths.push_back(z);
+    }
+  if (points.size() < 3) return;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) covariance += (p - mean) * (p - mean).transpose();
+  covariance /= static_cast<double>(points.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  const double rms = std::sqrt(std::max(0.0, solver.eigenvalues()[0]));  // the smallest
+  std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2),
+                   depths.end());
+  const double median = depths[depths.size() / 2];
+  require(rms <= kMaxPlaneRms * median, "slits",
+          "with scale put the reference points " + brief(1e3 * rms) +
+              " mm rms off one plane (at most " + brief(100 * kMaxPlaneRms) + " % of their " +
+              brief(median) + " m median depth): u_inf, the scale or the slits were changed");
+}
+
 }  // namespace
 
 void Reference::validate() const {
@@ -134,6 +172,7 @@ void Reference::validate() const {
   require(!slits.empty() && slits.size() <= 256, "slits", "must hold 1 .. 256 slits");
   for (std::size_t k = 0; k < slits.size(); ++k) validateSlit(*this, k);
   for (std::size_t k = 1; k < slits.size(); ++k) validateSpacing(*this, k);
+  if (scale.valid()) validatePlane(*this);
 }
 
 }  // namespace multislit

@@ -119,6 +119,18 @@ TEST(Reference, OutOfRangeValuesAreRefusedNamingTheField) {
               std::string::npos)
         << e.what();
   }
+  // Every other slit's reference points moved 40 % farther: no longer one plane.
+  Reference bent = good();
+  for (std::size_t k = 1; k < bent.slits.size(); k += 2)
+    for (std::size_t i = 0; i < bent.slits[k].u_inf.size(); ++i)
+      bent.slits[k].u_inf[i] =
+          bent.slits[k].u[i] - (bent.slits[k].u[i] - bent.slits[k].u_inf[i]) / 1.4f;
+  try {
+    bent.validate();
+    FAIL() << "reference points off one plane were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mm rms off one plane"), std::string::npos) << e.what();
+  }
   Reference outside = good();
   outside.slits[0].u[0] = 5000.0f;  // a column beyond the 1296 px image
   try {
