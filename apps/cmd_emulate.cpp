@@ -1,6 +1,7 @@
 // multislit emulate: a GigE Vision camera on 127.0.0.1 serving the simulator's images of a walk.
 #include "cli.h"
 #include "commands.h"
+#include "common.h"
 #include "output_file.h"
 
 #include "multislit/sim/camera_emulator.h"
@@ -169,7 +170,8 @@ void addOptions(cli::ArgParser& args) {
   args.option("loss", "0", "fraction of stream packets not sent, to test lossy links");
   args.option("bit-depth", "8", "8 (Mono8) or 16 (Mono16)");
   args.option("seed", "1", "noise seed");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("sensor", "",
+              std::string("sensor YAML (default: the paper's sensor)") + kRenderMemory);
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("walk",
             "serve the demo's walk (multislit walk) rendered live as the camera sends, instead "

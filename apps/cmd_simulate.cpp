@@ -42,7 +42,9 @@ std::vector<std::string> photometryChoices() {
 void addSimulateOptions(cli::ArgParser& args) {
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor, data/sensor.yaml)");
+  args.option(
+      "sensor", "",
+      std::string("sensor YAML (default: the paper's sensor, data/sensor.yaml)") + kRenderMemory);
   args.option("frames", "10", "number of sequence frames");
   args.option("fps", "30", "frame rate for the time stamps [Hz]");
   args.option("seed", "",

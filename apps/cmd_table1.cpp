@@ -86,7 +86,8 @@ int runTable1(int argc, char** argv) {
       "the same for every pose. Writes table1.csv and fig12.png.");
   args.option("frames", "100", "frames per condition (the paper averaged 100)");
   args.option("seed", "1", "noise seed");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("sensor", "",
+              std::string("sensor YAML (default: the paper's sensor)") + kRenderMemory);
   args.option("out", "out/table1", "output folder");
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C: nothing is written (a table of fewer poses is no Table I)
