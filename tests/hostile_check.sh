@@ -101,4 +101,8 @@ bad_index missing "$head_row\n$(swap 0 2 frame_999999.png)\n" \
   "frames.csv:2: file 'frame_999999.png' is missing"
 bad_index dot "$head_row\n$(swap 0 2 .)\n" "frames.csv:2: file '.' is not a file name"
 bad_index passwd "$head_row\n$(swap 0 2 /etc/passwd)\n" "frames.csv:2: file '/etc/passwd' is not"
+# bench --sequence reads robot_x of frames.csv: a number, within 100 km.
+rm -rf B && cp -r S B && sed -i '2s/^\([^,]*,[^,]*,[^,]*\),[^,]*/\1,1e400/' B/frames.csv
+refused_with 1 "B/frames.csv:2: robot_x '1e400' is not a position within 100000 m" \
+  "$M" bench --sequence B --calibration c.yaml --sensor S/sensor.yaml --passes 1
 echo "hostile_check: $refused_count refusals, each with its message and exit code"
