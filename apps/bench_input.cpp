@@ -2,12 +2,16 @@
 #include "bench_input.h"
 
 #include "common.h"
+#include "output_file.h"
 
+#include "multislit/odometry.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -33,17 +37,28 @@ SensorConfig scaledSensor(int scale) {
   return s;
 }
 
-/// robot_x of each frame from the frames.csv `multislit simulate` writes; 0 without it.
+/// robot_x of each frame from the frames.csv `multislit simulate` writes; 0 without it (or when
+/// it is not a regular file: a FIFO is never opened). Throws naming the line of a robot_x that is
+/// not a finite position within kMaxOdometryDistance.
 std::vector<double> robotPositions(const std::filesystem::path& dir, std::size_t frames) {
   std::vector<double> x(frames, 0.0);
-  std::ifstream csv(dir / "frames.csv");
+  const std::filesystem::path path = dir / "frames.csv";
+  if (!std::filesystem::is_regular_file(path)) return x;
+  std::ifstream csv(path);
   std::string line;
   std::getline(csv, line);  // header: frame,file,stamp_us,robot_x,...
   for (std::size_t k = 0; k < frames && std::getline(csv, line); ++k) {
     std::stringstream fields(line);
     std::string field;
-    for (int column = 0; column < 4 && std::getline(fields, field, ','); ++column)
-      if (column == 3) x[k] = std::stod(field);
+    for (int column = 0; column < 4 && std::getline(fields, field, ','); ++column) {
+      if (column != 3) continue;
+      char* end = nullptr;
+      x[k] = std::strtod(field.c_str(), &end);
+      if (field.empty() || *end != '\0' || !(std::abs(x[k]) <= kMaxOdometryDistance))
+        throw std::runtime_error(path.string() + ":" + std::to_string(k + 2) + ": robot_x '" +
+                                 field + "' is not a position within " +
+                                 std::to_string(static_cast<long>(kMaxOdometryDistance)) + " m");
+    }
   }
   return x;
 }
@@ -69,7 +84,7 @@ BenchInput renderBenchInput(const std::string& scenario, long frames, double ste
   in.sensor.mount = s.mount;
   cli::Progress progress(static_cast<std::size_t>(frames),
                          "render x" + std::to_string(scale) + " " + s.name);
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const auto frame = static_cast<std::uint64_t>(k);
     in.world_from_camera.push_back(s.worldFromRobot(frame) * in.robot_from_camera);
     in.images.push_back(sim.render(s.scene, in.world_from_camera.back(), frame).image);

@@ -71,7 +71,7 @@ MethodTimes timeMethod(const char* name, RenderMethod method, const std::vector<
   if (!views.empty())  // not timed: the first render builds tables and buffers
     sim.render(views.front().scene, views.front().world_from_camera, views.front().frame);
   cli::Progress progress(views.size() * static_cast<std::size_t>(passes), name);
-  for (int pass = 0; pass < passes; ++pass) {
+  for (int pass = 0; pass < passes && !StopSignal::requested(); ++pass) {
     for (const View& v : views) {
       RenderTimes spent;
       const double cpu_start = processCpuSeconds();
@@ -95,6 +95,10 @@ int benchRender(long frames, int passes, const std::string& csv) {
   const std::vector<View> views = walkViews(frames);
   const MethodTimes before = timeMethod("exhaustive", RenderMethod::Exhaustive, views, passes);
   const MethodTimes after = timeMethod("culled", RenderMethod::Culled, views, passes);
+  if (StopSignal::requested()) {
+    std::printf("bench --render: interrupted (Ctrl-C or SIGTERM): nothing written\n");
+    return kInterruptedExit;
+  }
   std::printf(
       "multislit bench --render: %zu frames of the walk (floor, ball, cable), 1296x964, %d "
       "passes, %d threads\n",

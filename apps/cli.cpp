@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 namespace multislit::cli {
@@ -113,21 +114,20 @@ double ArgParser::number(const std::string& name, double lo, double hi) const {
 }
 
 long ArgParser::integer(const std::string& name, long lo, long hi) const {
-  const long v = integer(name);
-  if (v < lo || v > hi)
-    throw UsageError("--" + name + " must be a whole number in [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "], not " + str(name));
-  return v;
-}
-
-long ArgParser::integer(const std::string& name) const {
   const std::string text = str(name);
   char* end = nullptr;
   errno = 0;
   const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno != 0)
+  if (text.empty() || *end != '\0' || (errno != 0 && errno != ERANGE))
     throw UsageError("--" + name + " must be a whole number, not '" + text + "'");
+  if (errno == ERANGE || v < lo || v > hi)
+    throw UsageError("--" + name + " must be a whole number in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "], not " + text);
   return v;
+}
+
+long ArgParser::integer(const std::string& name) const {
+  return integer(name, std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
 }
 
 std::vector<std::string> ArgParser::list(const std::string& name) const {

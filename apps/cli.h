@@ -34,6 +34,8 @@ class ArgParser {
 
   std::string str(const std::string& name) const;
   double number(const std::string& name) const;  ///< finite; NaN and infinity are refused
+  /// A whole number that fits an `int` (the config fields it goes to): 4294967298 is refused,
+  /// not wrapped to 2.
   long integer(const std::string& name) const;
   /// The same, refused with a UsageError naming the range unless lo <= value <= hi.
   double number(const std::string& name, double lo, double hi) const;

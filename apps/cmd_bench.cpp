@@ -68,8 +68,8 @@ PathRun runOurs(const BenchInput& in, int passes) {
   config.sensor = in.sensor;
   const Eigen::Isometry3d camera_from_robot = in.robot_from_camera.inverse();
   auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
-  for (int pass = -1; pass < passes; ++pass) {  // pass -1: warm-up, not timed
-    Pipeline pipeline(config);                  // each pass maps the same walk from scratch
+  for (int pass = -1; pass < passes && !StopSignal::requested(); ++pass) {  // -1: warm-up
+    Pipeline pipeline(config);  // each pass maps the same walk from scratch
     for (std::size_t k = 0; k < n; ++k) {
       const double t0 = threadSeconds();
       const ExtractionStats stats = extractor.extract(in.images[k], *cloud);
@@ -258,11 +258,18 @@ ScaleResult measure(const BenchInput& in, int passes, double tolerance) {
   r.scale = in.scale;
   r.frames = in.images.size();
   r.ours = runOurs(in, passes);
+  if (StopSignal::requested()) return r;
   r.points = r.ours.valid_points;
   r.threshold = metricThreshold(in.reference, FloorDetectorConfig{}.threshold());
   r.stock = runStockPath(in, std::max(1, passes / 4), r.threshold.median);
   r.agreement = compare(r.ours.detections, r.stock.detections, tolerance);
   return r;
+}
+
+/// Ctrl-C or SIGTERM before the table: said, nothing written.
+int interrupted() {
+  std::printf("bench: interrupted (Ctrl-C or SIGTERM): nothing written\n");
+  return kInterruptedExit;
 }
 
 std::vector<int> parseScales(const std::string& text) {
@@ -312,6 +319,7 @@ int runBench(int argc, char** argv) {
       "OcTree::insertPointCloud; prints the speed-up and how often both detect the same.");
   addBenchOptions(args);
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C: the soak's report so far; else nothing (no table of a part)
   const std::vector<int> scales = parseScales(args.str("scale"));
   const int passes = args.has("passes")   ? static_cast<int>(args.integer("passes", 1, 100000))
                      : args.has("render") ? 1
@@ -329,8 +337,8 @@ int runBench(int argc, char** argv) {
     inputs.push_back(args.has("sequence")
                          ? readBenchInput(args)
                          : renderBenchInput(args.str("scenario"), frames, step, scale));
+  if (StopSignal::requested()) return interrupted();
   if (soak_frames > 0) {
-    const StopSignal stop;  // Ctrl-C: the report of the frames run so far
     const SoakResult r = soak(inputs.front(), static_cast<std::size_t>(soak_frames), 200);
     const int rc = reportSoak(r, 0.1, 0.05, args.str("soak-png"));
     return StopSignal::requested() ? kInterruptedExit : rc;
@@ -338,7 +346,10 @@ int runBench(int argc, char** argv) {
   const double rss_before = peakRssMb();
   const int cpu = pinToOneCore(cpu_asked);
   std::vector<ScaleResult> results;
-  for (const BenchInput& in : inputs) results.push_back(measure(in, passes, tolerance));
+  for (const BenchInput& in : inputs) {
+    results.push_back(measure(in, passes, tolerance));
+    if (StopSignal::requested()) return interrupted();
+  }
 
   std::printf("multislit bench: %s, pinned to CPU %d, %d passes (stock: %d)\n",
               inputs.front().label.c_str(), cpu, passes, std::max(1, passes / 4));

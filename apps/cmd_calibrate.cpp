@@ -80,15 +80,9 @@ std::vector<std::string> inputsOf(const cli::ArgParser& args) {
 
 // Whole or absent: written beside `path`, read back (a full disk cuts it), then renamed.
 void writeCalibration(const Reference& ref, const std::string& path) {
-  OutputFile file(path);
-  file.stream().close();
-  ref.save(file.temporaryPath().string());
-  try {
-    Reference::load(file.temporaryPath().string());
-  } catch (const std::exception&) {
-    throw std::runtime_error("could not write all of " + path + " (disk full?)");
-  }
-  file.commit();
+  writeWhole(
+      path, [&ref](const std::string& tmp) { ref.save(tmp); },
+      [](const std::string& tmp) { Reference::load(tmp); });
 }
 
 }  // namespace

@@ -181,7 +181,8 @@ int runDetect(int argc, char** argv) {
   std::size_t found = 0, obstacles = 0, off_plane = 0, points = 0, done = 0;
   double total_ms = 0;
   for (std::size_t i = 0; i < frames.size() && !StopSignal::requested(); ++i, ++done) {
-    const cv::Mat image = readMonoImage(frames[i]);
+    const Reference& ref = extractor.reference();
+    const cv::Mat image = readMonoImage(frames[i], cv::Size(ref.image_width, ref.image_height));
     const auto t0 = std::chrono::steady_clock::now();
     pcl::PointCloud<PointRDM>::Ptr cloud;
     try {

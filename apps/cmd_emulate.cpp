@@ -1,6 +1,7 @@
 // multislit emulate: a GigE Vision camera on 127.0.0.1 serving the simulator's images of a walk.
 #include "cli.h"
 #include "commands.h"
+#include "common.h"
 #include "config_options.h"
 #include "output_file.h"
 
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -172,7 +174,8 @@ void addOptions(cli::ArgParser& args) {
               "fraction of stream packets not sent, to test lossy links");
   args.option("bit-depth", defaultText(render.bit_depth), "8 (Mono8) or 16 (Mono16)");
   args.option("seed", std::to_string(render.seed), "noise seed");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("sensor", "",
+              std::string("sensor YAML (default: the paper's sensor)") + kRenderMemory);
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("walk",
             "serve the demo's walk (multislit walk) rendered live as the camera sends, instead "
@@ -219,8 +222,8 @@ int runEmulate(int argc, char** argv) {
     throw cli::UsageError("--ahead needs --walk: a scenario's frames are all made before serving");
 
   RenderConfig render;
-  render.seed = static_cast<uint64_t>(args.integer("seed"));
-  render.bit_depth = static_cast<int>(args.integer("bit-depth"));
+  render.seed = static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()));
+  render.bit_depth = static_cast<int>(args.integer("bit-depth", 8, 16));
   render.noise = !args.has("no-noise");
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};

@@ -43,6 +43,9 @@ void declareMapOptions(cli::ArgParser& args) {
   args.option("frames", "0", "stop after this many frames (0: all, or until Ctrl-C)");
   args.option("fps", defaultText(MapInputOptions{}.fps), "camera frame rate [Hz]");
   args.option("out", "out/map", "output folder");
+  args.flag("strict",
+            "a frame file of a recording that cannot be read is an error (default: "
+            "named, counted in summary.txt and skipped)");
 }
 
 MapInputOptions inputOptions(const cli::ArgParser& args) {
@@ -52,7 +55,7 @@ MapInputOptions inputOptions(const cli::ArgParser& args) {
   o.simulate = args.str("simulate");
   o.calibration = args.str("calibration");
   o.sensor = args.str("sensor");
-  if (args.has("camera")) o.fps = args.number("fps", 0.1, 1000);
+  o.fps = args.number("fps", 0.1, 1000);
   o.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
   return o;
 }
@@ -87,13 +90,15 @@ struct FrameCounts {
   std::size_t processed = 0;              ///< frames through the whole chain
   std::size_t misses = 0;                 ///< frames without a pose, skipped
   std::size_t bad_frames = 0;             ///< frames the extractor refused
+  std::uint64_t unreadable = 0;           ///< frame files missing, unreadable or not images
   StampSource clock = StampSource::Host;  ///< the stamps' clock, of the last frame measured
 };
 
 /// Every frame of `source` through the chain, until the source ends, Ctrl-C or `max_frames`
-/// (0: no limit); `t0` the run's start, for the status line. Starts the source.
+/// (0: no limit); `t0` the run's start, for the status line. Starts the source. A frame file that
+/// cannot be read is named and counted (an error with `strict`).
 FrameCounts processFrames(FrameSource& source, const Extractor& extractor, MapPoses& poses,
-                          Pipeline& pipeline, MapRecorder& recorder, long max_frames,
+                          Pipeline& pipeline, MapRecorder& recorder, long max_frames, bool strict,
                           std::chrono::steady_clock::time_point t0) {
   FrameCounts n;
   source.start();
@@ -101,6 +106,12 @@ FrameCounts processFrames(FrameSource& source, const Extractor& extractor, MapPo
          (max_frames == 0 || static_cast<long>(n.processed) < max_frames)) {
     const std::optional<Frame> frame = source.next(std::chrono::milliseconds(200));
     if (!frame) {
+      if (source.stats().read_errors > n.unreadable) {
+        n.unreadable = source.stats().read_errors;
+        if (strict) throw std::runtime_error(source.lastError() + " (--strict)");
+        std::cerr << "skipped: " << source.lastError() << "\n";
+        recorder.unreadable(source.lastError());
+      }
       if (source.finished()) break;
       continue;
     }
@@ -158,8 +169,8 @@ int runMap(int argc, char** argv) {
   MapRecorder recorder(args.str("out"));
 
   const auto t0 = std::chrono::steady_clock::now();
-  const FrameCounts counts =
-      processFrames(*in.source, extractor, poses, pipeline, recorder, max_frames, t0);
+  const FrameCounts counts = processFrames(*in.source, extractor, poses, pipeline, recorder,
+                                           max_frames, args.has("strict"), t0);
   in.source->stop();
   if (isatty(STDERR_FILENO)) std::fprintf(stderr, "\n");
   const double seconds =

@@ -74,7 +74,8 @@ int runRdmap(int argc, char** argv) {
   cli::Progress progress(images.size(), "rdmap");
   for (std::size_t i = 0; i < images.size() && !StopSignal::requested(); ++i) {
     const std::filesystem::path in = images[i];
-    const cv::Mat image = readMonoImage(in.string());
+    const Reference& ref = extractor.reference();
+    const cv::Mat image = readMonoImage(in.string(), cv::Size(ref.image_width, ref.image_height));
     pcl::PointCloud<PointRDM> cloud;
     ExtractionStats stats;
     try {

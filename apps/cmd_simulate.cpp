@@ -43,7 +43,9 @@ std::vector<std::string> photometryChoices() {
 void addSimulateOptions(cli::ArgParser& args) {
   args.option("scenario", "reference", "named scenario (scene, pose and motion)");
   args.option("scene", "", "scene YAML replacing the scenario's objects and floor");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor, data/sensor.yaml)");
+  args.option(
+      "sensor", "",
+      std::string("sensor YAML (default: the paper's sensor, data/sensor.yaml)") + kRenderMemory);
   args.option("frames", "10", "number of sequence frames");
   args.option("fps", "30", "frame rate for the time stamps [Hz]");
   args.option("seed", "",
@@ -93,6 +95,12 @@ Photometry photometryFromArgs(const cli::ArgParser& args, uint64_t seed, Scene& 
   return photometry;
 }
 
+/// The ground truth of a frame, whole or absent.
+void writeGroundTruth(const std::filesystem::path& path, const std::vector<SlitCrossing>& truth,
+                      const Scene& scene) {
+  writeWhole(path, [&](const std::string& p) { writeGroundTruthCsv(p, truth, scene); });
+}
+
 // The sequence: frame_NNNNNN.png and .csv (ground truth) per frame, frames.csv (index and
 // poses) and odometry.csv in `out`. Returns the number of slit crossings in all frames.
 /// The sequence's frames, ground truth, frames.csv and odometry.csv; Ctrl-C ends it after a whole
@@ -116,7 +124,7 @@ std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long f
     char name[32];
     std::snprintf(name, sizeof name, "frame_%06ld", k);
     writeImage((out / (std::string(name) + ".png")).string(), f.image);
-    writeGroundTruthCsv((out / (std::string(name) + ".csv")).string(), f.truth, scenario.scene);
+    writeGroundTruth(out / (std::string(name) + ".csv"), f.truth, scenario.scene);
     crossings += f.truth.size();
     const Eigen::Vector3d c = world_from_camera.translation();
     const auto stamp = static_cast<std::uint64_t>(stamp0 + static_cast<long long>(k * 1e6 / fps));
@@ -129,7 +137,7 @@ std::size_t writeSequence(const Simulator& sim, const Scenario& scenario, long f
   }
   progress.finish();
   index_file.commit();
-  if (!odometry.empty()) saveOdometry((out / "odometry.csv").string(), odometry);
+  if (!odometry.empty()) writeOdometry(out / "odometry.csv", odometry);
   return crossings;
 }
 
@@ -182,11 +190,22 @@ int runSimulate(int argc, char** argv) {
   used.validate();  // the sensor.yaml written below is one SensorConfig::load() takes
 
   const std::filesystem::path out = args.str("out");
+  const std::vector<std::string> inputs{args.str("sensor"), args.str("scene"),
+                                        args.str("photometry")};
+  for (const char* name : {"sensor.yaml", "scene.yaml", "photometry.yaml"})
+    refuseOverwritingInputs(out / name, inputs);
   std::filesystem::create_directories(out);
   const Simulator sim(sensor, photometry.render);
-  used.save((out / "sensor.yaml").string());
-  scenario.scene.save((out / "scene.yaml").string());
-  savePhotometry(photometry, (out / "photometry.yaml").string());
+  writeWhole(
+      out / "sensor.yaml", [&used](const std::string& p) { used.save(p); },
+      [](const std::string& p) { SensorConfig::load(p); });
+  writeWhole(
+      out / "scene.yaml", [&scenario](const std::string& p) { scenario.scene.save(p); },
+      [](const std::string& p) { Scene::load(p); });
+  writeWhole(
+      out / "photometry.yaml",
+      [&photometry](const std::string& p) { savePhotometry(photometry, p); },
+      [](const std::string& p) { loadPhotometry(p); });
 
   const auto t0 = std::chrono::steady_clock::now();
   if (!args.has("no-reference")) {
@@ -194,7 +213,7 @@ int runSimulate(int argc, char** argv) {
     const Scene floor_only{scenario.scene.floor, {}};
     const RenderedFrame ref = sim.renderReference(floor_only, scenario.reference_mount);
     writeImage((out / "reference.png").string(), ref.image);
-    writeGroundTruthCsv((out / "reference.csv").string(), ref.truth, floor_only);
+    writeGroundTruth(out / "reference.csv", ref.truth, floor_only);
   }
   const std::size_t crossings = writeSequence(sim, scenario, frames, fps, out);
   const double seconds =

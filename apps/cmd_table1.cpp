@@ -37,7 +37,7 @@ FloorNoise measureFloorNoise(const Simulator& sim, const Extractor& extractor, c
   const Eigen::Isometry3d pose = sim.geometry().robotFromCamera(mount);
   std::vector<double> stds;
   double points = 0;
-  for (long k = 0; k < frames; ++k) {
+  for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const RenderedFrame f = sim.render(floor, pose, static_cast<uint64_t>(cond * 100000 + k));
     pcl::PointCloud<PointRDM> cloud;
     extractor.extract(f.image, cloud);
@@ -56,8 +56,9 @@ FloorNoise measureFloorNoise(const Simulator& sim, const Extractor& extractor, c
 }
 
 // The table (`rows`, one per condition) on stdout and Fig. 12 (fig12.png in `out`): the mean
-// residual std per condition with its spread.
-void reportTable1(const std::filesystem::path& out, long frames,
+// residual std per condition with its spread; then `csv` (table1.csv) is committed: both files
+// or neither.
+void reportTable1(const std::filesystem::path& out, OutputFile& csv, long frames,
                   const std::vector<std::string>& rows, const std::vector<std::string>& labels,
                   const std::vector<double>& means, const std::vector<double>& spreads) {
   std::printf("%-10s %6s %6s %6s %8s %13s\n", "condition", "theta", "phi", "h", "points",
@@ -67,6 +68,7 @@ void reportTable1(const std::filesystem::path& out, long frames,
       (out / "fig12.png").string(),
       "Fig. 12: floor residual std per Table I pose (" + std::to_string(frames) + " frames each)",
       "std [px]", labels, means, spreads);
+  csv.commit();
   const auto [lo, hi] = std::minmax_element(means.begin(), means.end());
   std::printf("max / min over the conditions: %.2f (the paper: almost constant)\nwrote %s and %s\n",
               *hi / *lo, (out / "table1.csv").string().c_str(),
@@ -84,9 +86,11 @@ int runTable1(int argc, char** argv) {
       "the same for every pose. Writes table1.csv and fig12.png.");
   args.option("frames", "100", "frames per condition (the paper averaged 100)");
   args.option("seed", "1", "noise seed");
-  args.option("sensor", "", "sensor YAML (default: the paper's sensor)");
+  args.option("sensor", "",
+              std::string("sensor YAML (default: the paper's sensor)") + kRenderMemory);
   args.option("out", "out/table1", "output folder");
   if (!args.parse(argc, argv)) return 0;
+  const StopSignal stop;  // Ctrl-C: nothing is written (a table of fewer poses is no Table I)
   const long frames = args.integer("frames", 1, 1000000);
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
@@ -107,7 +111,7 @@ int runTable1(int argc, char** argv) {
   std::vector<double> means, spreads;
   cli::Progress progress(static_cast<std::size_t>(7 * frames), "table1");
   std::vector<std::string> rows;
-  for (int cond = 0; cond <= 6; ++cond) {
+  for (int cond = 0; cond <= 6 && !StopSignal::requested(); ++cond) {
     const MountConfig mount = tableIPose(cond);
     const FloorNoise noise =
         measureFloorNoise(sim, extractor, ref_scene.scene, mount, cond, frames, progress);
@@ -124,8 +128,11 @@ int runTable1(int argc, char** argv) {
     rows.push_back(row);
   }
   progress.finish();
-  csv_file.commit();
-  reportTable1(out, frames, rows, labels, means, spreads);
+  if (StopSignal::requested()) {
+    std::printf("table1: interrupted (Ctrl-C or SIGTERM): nothing written\n");
+    return kInterruptedExit;
+  }
+  reportTable1(out, csv_file, frames, rows, labels, means, spreads);
   return 0;
 }
 

@@ -310,7 +310,7 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
     r.top.objects.push_back(outlineOf(rec.object));
     r.top.object_notes.push_back(note);
   }
-  walk.map().save((out / "map.bt").string());
+  writeWhole(out / "map.bt", [&walk](const std::string& p) { walk.map().save(p); });
   drawTopView((out / "map_top.png").string(), walk.map(), r.top);
 }
 
@@ -346,7 +346,8 @@ int runWalk(int argc, char** argv) {
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
-    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor);
+    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor,
+                      std::vector<std::string>{args.str("sensor"), args.str("photometry")});
   }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
   for (long k = 0; k < frames && !StopSignal::requested(); ++k) {

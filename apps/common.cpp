@@ -1,18 +1,28 @@
 #include "common.h"
 
 #include "cli.h"
+#include "output_file.h"
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace multislit::apps {
 
 void writeImage(const std::string& path, const cv::Mat& image) {
-  if (!cv::imwrite(path, image)) throw std::runtime_error("cannot write image '" + path + "'");
+  std::vector<std::uint8_t> bytes;
+  const std::string extension = std::filesystem::path(path).extension().string();
+  if (!cv::imencode(extension, image, bytes))
+    throw std::runtime_error("cannot write image '" + path + "'");
+  OutputFile file(path);  // whole or absent
+  file.stream().write(reinterpret_cast<const char*>(bytes.data()),
+                      static_cast<std::streamsize>(bytes.size()));
+  file.commit();
 }
 
 void addReferenceOptions(cli::ArgParser& args) {

@@ -15,6 +15,12 @@
 namespace multislit::apps {
 
 void writeImage(const std::string& path, const cv::Mat& image);
+
+/// The simulator's peak memory by the size of its camera, measured (1296x964: 181 MB, 2592x1928:
+/// 368 MB), for the --sensor help of the commands that render.
+inline constexpr const char* kRenderMemory =
+    "; rendering takes about 120 MB and 50 bytes a pixel of its camera: 180 MB at 1296x964, "
+    "3.4 GB at 8192x8192, 13.5 GB at 16384x16384";
 /// "gaussian", "centroid" or "windowed"; throws cli::UsageError otherwise.
 Estimator parseEstimator(const std::string& name);
 /// The command line's name of an estimator, as parseEstimator() reads it.

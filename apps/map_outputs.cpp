@@ -1,13 +1,16 @@
 #include "map_outputs.h"
 #include "multislit/units.h"
 
+#include "output_file.h"
 #include "plot.h"
 #include "walk_figures.h"
 
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace multislit::apps {
 
@@ -20,10 +23,19 @@ std::ofstream openCsv(const std::filesystem::path& path, const char* header) {
   return csv;
 }
 
-void checkWritten(std::ofstream& csv, const std::filesystem::path& path) {
-  csv.flush();
-  if (!csv) throw std::runtime_error("could not write all of " + path.string());
-  csv.close();
+/// Closes the files written row by row (live, for `tail -f`); those that could not be written
+/// whole are removed, not left cut, and the first is named in the error.
+void checkWritten(std::initializer_list<std::pair<std::ofstream*, std::filesystem::path>> files) {
+  std::string failed;
+  for (const auto& [csv, path] : files) {
+    csv->close();
+    if (*csv) continue;
+    std::error_code ignored;
+    std::filesystem::remove(path, ignored);
+    if (failed.empty()) failed = path.string();
+  }
+  if (!failed.empty())
+    throw std::runtime_error("could not write all of " + failed + " (disk full?)");
 }
 
 }  // namespace
@@ -77,6 +89,8 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
   sum_.map += r.times.map, sum_.walker += r.times.walker;
   path_.push_back(r.body);
   obstacle_points_.push_back(static_cast<double>(r.obstacles.pointCount()));
+  if (!r.dropped.empty() && dropped_++ == 0)  // the first is told; all are counted
+    events_.push_back("frame " + std::to_string(seq) + " dropped: " + r.dropped);
   if (frames_ == 1 || r.walker.command != last_) {
     events_.push_back("frame " + std::to_string(seq) + ": " + commandName(r.walker.command) + " (" +
                       reasonName(r.walker.reason) + ")");
@@ -92,10 +106,9 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
 
 std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& heading,
                                 double seconds, bool interrupted) {
-  checkWritten(frames_csv_, out_ / "decisions.csv");
-  checkWritten(groups_csv_, out_ / "obstacles.csv");
+  checkWritten({{&frames_csv_, out_ / "decisions.csv"}, {&groups_csv_, out_ / "obstacles.csv"}});
   const OccupancyMap& map = pipeline.map();
-  map.save((out_ / "map.bt").string());
+  writeWhole(out_ / "map.bt", [&map](const std::string& p) { map.save(p); });
   TopViewContent top;
   top.path = path_;
   drawTopView((out_ / "map_top.png").string(), map, top);
@@ -111,26 +124,33 @@ std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& hea
   const double n = static_cast<double>(std::max<std::size_t>(frames_, 1));
   std::ostringstream o;
   char s[640];
-  std::snprintf(s, sizeof s,
-                "%s\n"
-                "  frames: %zu processed%s, %zu skipped without a pose, %zu without a floor\n"
-                "  decisions: walk %zu, turn %zu, stop %zu; obstacle groups: %zu\n"
-                "  map: %zu occupied voxels of %.0f mm, %zu voxels, %.0f kB\n"
-                "  per frame (CPU): extraction %.3f ms, floor %.3f ms, obstacles %.3f ms, map "
-                "%.3f ms, footsteps and decision %.3f ms; %.1f s in all\n",
-                heading.c_str(), frames_, interrupted ? " (interrupted)" : "", skipped_, no_floor_,
-                decisions_[0], decisions_[1], decisions_[2], groups_, map.occupiedCount(),
-                1e3 * pipeline.config().map.resolution, map.leafCount(), map.memoryUsage() / 1e3,
-                1e3 * extract_sum_ / n, 1e3 * sum_.floor / n, 1e3 * sum_.obstacles / n,
-                1e3 * sum_.map / n, 1e3 * sum_.walker / n, seconds);
-  o << s << "what the robot was told:\n";
+  std::snprintf(
+      s, sizeof s,
+      "%s\n"
+      "  frames: %zu processed%s, %zu skipped without a pose, %zu without a floor (%zu of "
+      "them dropped: implausible numbers)\n"
+      "  decisions: walk %zu, turn %zu, stop %zu; obstacle groups: %zu\n"
+      "  map: %zu occupied voxels of %.0f mm, %zu voxels, %.0f kB\n"
+      "  per frame (CPU): extraction %.3f ms, floor %.3f ms, obstacles %.3f ms, map "
+      "%.3f ms, footsteps and decision %.3f ms; %.1f s in all\n",
+      heading.c_str(), frames_, interrupted ? " (interrupted)" : "", skipped_, no_floor_, dropped_,
+      decisions_[0], decisions_[1], decisions_[2], groups_, map.occupiedCount(),
+      1e3 * pipeline.config().map.resolution, map.leafCount(), map.memoryUsage() / 1e3,
+      1e3 * extract_sum_ / n, 1e3 * sum_.floor / n, 1e3 * sum_.obstacles / n, 1e3 * sum_.map / n,
+      1e3 * sum_.walker / n, seconds);
+  o << s;
+  if (!unreadable_.empty()) o << "  frames that could not be read: " << unreadable_.size() << "\n";
+  for (std::size_t k = 0; k < unreadable_.size() && k < 20; ++k)
+    o << "    " << unreadable_[k] << "\n";
+  if (unreadable_.size() > 20) o << "    ... and " << unreadable_.size() - 20 << " more\n";
+  o << "what the robot was told:\n";
   for (const std::string& e : events_) o << "  " << e << "\n";
   o << "outputs in " << out_.string()
     << ": decisions.csv, obstacles.csv, map.bt, map_top.png, fig15_obstacle_points.png, "
        "rdmap_most_obstacles.png, summary.txt\n";
-  std::ofstream summary(out_ / "summary.txt");
-  summary << o.str();
-  checkWritten(summary, out_ / "summary.txt");
+  OutputFile summary(out_ / "summary.txt");
+  summary.stream() << o.str();
+  summary.commit();
   return o.str();
 }
 

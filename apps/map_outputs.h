@@ -26,6 +26,9 @@ class MapRecorder {
               const OccupancyMap& map);
   /// A frame that got no pose (skipped, not processed).
   void skip() { ++skipped_; }
+  /// A frame file that could not be read (missing, unreadable, not a grey image): `what` names
+  /// it; counted and listed in summary.txt.
+  void unreadable(const std::string& what) { unreadable_.push_back(what); }
 
   /// map.bt, map_top.png, fig15_obstacle_points.png, rdmap_most_obstacles.png, summary.txt; the
   /// CSV files closed. Returns the summary (also written). `heading`: what ran, on what.
@@ -37,9 +40,9 @@ class MapRecorder {
   std::ofstream frames_csv_, groups_csv_;
   std::vector<Pose2D> path_;
   std::vector<double> obstacle_points_;
-  std::vector<std::string> events_;
+  std::vector<std::string> events_, unreadable_;
   Command last_ = Command::Stop;
-  std::size_t frames_ = 0, skipped_ = 0, no_floor_ = 0, groups_ = 0;
+  std::size_t frames_ = 0, skipped_ = 0, no_floor_ = 0, dropped_ = 0, groups_ = 0;
   std::size_t decisions_[3] = {0, 0, 0};  ///< walk, turn, stop
   PipelineTimes sum_;
   double extract_sum_ = 0.0;    ///< [s]

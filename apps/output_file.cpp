@@ -48,6 +48,11 @@ OutputFile::OutputFile(fs::path path) : path_(std::move(path)) {
   const fs::file_status status = fs::status(path_, error);
   // A device or a pipe (/dev/stdout, /dev/full) is written in place: it cannot be replaced.
   direct_ = fs::exists(status) && !fs::is_regular_file(status);
+  // Renaming over a link would replace the link, and what it points to would stay as it was.
+  if (!direct_ && fs::is_symlink(fs::symlink_status(path_, error)))
+    throw std::runtime_error("the output " + path_.string() +
+                             " is a symbolic link: writing it would replace the link, not what "
+                             "it points to; name that file itself");
   temporary_ =
       direct_ ? path_
               : folder / ("." + path_.filename().string() + ".part-" + std::to_string(::getpid()));
@@ -77,6 +82,12 @@ void OutputFile::commit() {
   fs::rename(temporary_, path_, error);
   if (error) throw std::runtime_error("could not write " + path_.string() + ": " + error.message());
   committed_ = true;
+}
+
+void writeOdometry(const fs::path& path, const std::vector<OdometrySample>& samples) {
+  writeWhole(
+      path, [&samples](const std::string& p) { saveOdometry(p, samples); },
+      [](const std::string& p) { Odometry::load(p); });
 }
 
 void refuseOverwritingInputs(const fs::path& output, const std::vector<std::string>& inputs) {

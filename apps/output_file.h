@@ -3,8 +3,11 @@
 // input, or two outputs of one name, are refused before anything is written.
 #pragma once
 
+#include "multislit/odometry.h"
+
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -13,7 +16,8 @@ namespace multislit::apps {
 /// A file written whole or not at all. Write to stream(); commit() makes it appear under its
 /// name (throws std::runtime_error naming it when the disk is full or it cannot be written);
 /// destroyed without commit() (an error), the temporary file goes. A device or a pipe
-/// (/dev/stdout) is written in place, its write errors reported by commit() all the same.
+/// (/dev/stdout) is written in place, its write errors reported by commit() all the same; a
+/// symbolic link to anything else (a file, nothing) is refused by the constructor.
 class OutputFile {
  public:
   explicit OutputFile(std::filesystem::path path);
@@ -35,6 +39,31 @@ class OutputFile {
   bool direct_ = false;  ///< a device or pipe, written in place
   bool committed_ = false;
 };
+
+/// Writes `path` whole or not at all with a writer that takes a path: `save(temporary)`, then
+/// `check(temporary)` reads it back (a full disk cuts a file, and such writers do not say so),
+/// then it is renamed to `path`. Throws std::runtime_error naming `path` when either fails.
+template <typename Save, typename Check>
+void writeWhole(const std::filesystem::path& path, Save save, Check check) {
+  OutputFile file(path);
+  file.stream().close();
+  save(file.temporaryPath().string());
+  try {
+    check(file.temporaryPath().string());
+  } catch (const std::exception&) {
+    throw std::runtime_error("could not write all of " + path.string() + " (disk full?)");
+  }
+  file.commit();
+}
+
+/// The same with a writer that checks its own writes (throws when one fails).
+template <typename Save>
+void writeWhole(const std::filesystem::path& path, Save save) {
+  writeWhole(path, save, [](const std::string&) {});
+}
+
+/// odometry.csv, whole or absent (read back before it is renamed into place).
+void writeOdometry(const std::filesystem::path& path, const std::vector<OdometrySample>& samples);
 
 /// Ends a long run at a frame boundary on SIGINT or SIGTERM: while one lives, the signals set a
 /// flag that requested() reads, and the previous handlers come back when it goes. Commands then

@@ -8,14 +8,20 @@
 namespace multislit::apps {
 
 SequenceRecorder::SequenceRecorder(const std::filesystem::path& folder, const Reference& reference,
-                                   const SensorConfig& sensor)
+                                   const SensorConfig& sensor,
+                                   const std::vector<std::string>& inputs)
     : folder_(folder) {
+  for (const char* name : {"calibration.yaml", "sensor.yaml", "frames.csv", "odometry.csv"})
+    refuseOverwritingInputs(folder / name, inputs);
   std::filesystem::create_directories(folder);
-  reference.save((folder / "calibration.yaml").string());
-  sensor.save((folder / "sensor.yaml").string());
-  index_.open(folder / "frames.csv");
-  if (!index_) throw std::runtime_error("cannot write " + (folder / "frames.csv").string());
-  index_ << "frame,file,stamp_us\n";
+  writeWhole(
+      folder / "calibration.yaml", [&reference](const std::string& p) { reference.save(p); },
+      [](const std::string& p) { Reference::load(p); });
+  writeWhole(
+      folder / "sensor.yaml", [&sensor](const std::string& p) { sensor.save(p); },
+      [](const std::string& p) { SensorConfig::load(p); });
+  index_ = std::make_unique<OutputFile>(folder / "frames.csv");
+  index_->stream() << "frame,file,stamp_us\n";
 }
 
 void SequenceRecorder::add(const cv::Mat& image, std::uint64_t stamp_us,
@@ -23,16 +29,13 @@ void SequenceRecorder::add(const cv::Mat& image, std::uint64_t stamp_us,
   char name[32];
   std::snprintf(name, sizeof name, "frame_%06zu.png", poses_.size());
   writeImage((folder_ / name).string(), image);
-  index_ << poses_.size() << ',' << name << ',' << stamp_us << '\n';
+  index_->stream() << poses_.size() << ',' << name << ',' << stamp_us << '\n';
   poses_.push_back({stamp_us, world_from_robot});
 }
 
 void SequenceRecorder::finish() {
-  index_.flush();
-  if (!index_)
-    throw std::runtime_error("could not write all of " + (folder_ / "frames.csv").string());
-  index_.close();
-  saveOdometry((folder_ / "odometry.csv").string(), poses_);
+  index_->commit();
+  writeOdometry(folder_ / "odometry.csv", poses_);
 }
 
 }  // namespace multislit::apps

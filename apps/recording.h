@@ -2,6 +2,8 @@
 // odometry.csv (the robot's pose at each stamp, see odometry.h), calibration.yaml and sensor.yaml.
 #pragma once
 
+#include "output_file.h"
+
 #include "multislit/odometry.h"
 #include "multislit/reference.h"
 #include "multislit/sensor.h"
@@ -10,24 +12,28 @@
 
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
+#include <memory>
+#include <string>
 #include <vector>
 
 namespace multislit::apps {
 
 class SequenceRecorder {
  public:
-  /// Writes calibration.yaml and sensor.yaml into `folder` (created) and opens frames.csv.
+  /// Writes calibration.yaml and sensor.yaml into `folder` (created), each whole or absent, and
+  /// begins frames.csv; throws std::runtime_error when one of them would overwrite one of
+  /// `inputs` (`walk --sensor rec/sensor.yaml --record rec`).
   SequenceRecorder(const std::filesystem::path& folder, const Reference& reference,
-                   const SensorConfig& sensor);
+                   const SensorConfig& sensor, const std::vector<std::string>& inputs);
   /// One frame: frame_NNNNNN.png, its row of frames.csv and its pose.
   void add(const cv::Mat& image, std::uint64_t stamp_us, const Eigen::Isometry3d& world_from_robot);
-  /// Closes frames.csv and writes odometry.csv; throws std::runtime_error on a write error.
+  /// Completes frames.csv and writes odometry.csv; throws std::runtime_error on a write error
+  /// (then neither is left behind, cut).
   void finish();
 
  private:
   std::filesystem::path folder_;
-  std::ofstream index_;
+  std::unique_ptr<OutputFile> index_;  ///< frames.csv, renamed into place by finish()
   std::vector<OdometrySample> poses_;
 };
 

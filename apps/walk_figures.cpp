@@ -177,13 +177,16 @@ void drawTopView(const std::string& path, const OccupancyMap& map, const TopView
   const TopView view = fit(c, &size);
   cv::Mat img(size, CV_8UC3, kWhite);
   drawMapCells(img, view, map);
-  // A 10 cm grid.
-  for (double x = std::ceil(view.x0 * 10) / 10; view(Eigen::Vector2d(x, 0)).x < size.width;
-       x += 0.1)
+  // A 10 cm grid, coarser by tens while its lines would be under 8 px apart (a path of
+  // kilometres would otherwise draw millions of lines).
+  double step = 0.1;
+  while (step * view.scale < 8) step *= 10;
+  for (double x = std::ceil(view.x0 / step) * step; view(Eigen::Vector2d(x, 0)).x < size.width;
+       x += step)
     cv::line(img, {view(Eigen::Vector2d(x, 0)).x, 75}, {view(Eigen::Vector2d(x, 0)).x, size.height},
              kGrid, 1);
-  for (double y = std::floor(view.y1 * 10) / 10;
-       view(Eigen::Vector2d(0, y)).y < size.height && view(Eigen::Vector2d(0, y)).y > 74; y -= 0.1)
+  for (double y = std::floor(view.y1 / step) * step;
+       view(Eigen::Vector2d(0, y)).y < size.height && view(Eigen::Vector2d(0, y)).y > 74; y -= step)
     cv::line(img, {0, view(Eigen::Vector2d(0, y)).y}, {size.width, view(Eigen::Vector2d(0, y)).y},
              kGrid, 1);
   for (std::size_t k = 0; k < c.objects.size(); ++k) {
@@ -203,7 +206,10 @@ void drawTopView(const std::string& path, const OccupancyMap& map, const TopView
     cv::polylines(img, sole, true, c.footsteps[k].foot == Foot::Left ? kLeftFoot : kRightFoot, 1,
                   cv::LINE_AA);
   }
-  drawText(img, "occupancy map from above, path and footsteps (10 cm grid; walking to the right)",
+  const std::string grid = step < 1 ? std::to_string(std::lround(step * 100)) + " cm"
+                                    : std::to_string(std::llround(step)) + " m";
+  drawText(img,
+           "occupancy map from above, path and footsteps (" + grid + " grid; walking to the right)",
            {20, 30}, 0.6);
   int x = 20;
   legend(img, &x, cv::Scalar(0, 220, 255), "occupied voxel (yellow: floor, red: 5 cm up)");

@@ -142,17 +142,54 @@ std::optional<cv::Size> imageFileSize(const std::string& path) {
   return std::nullopt;
 }
 
-cv::Mat readMonoImage(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path))
-    throw std::runtime_error("image '" + path + "' does not exist");
+namespace {
+
+/// A PNG's colour type (IHDR byte 25: 0 grey, 2 RGB, 3 palette, 4 grey + alpha, 6 RGBA); nullopt
+/// for other formats.
+std::optional<int> pngColourType(const std::string& path) {
+  Bytes f(path);
+  std::array<std::uint8_t, 26> head{};
+  if (!f.read(0, head.size(), head.data()) || head[1] != 'P' || head[2] != 'N' || head[3] != 'G')
+    return std::nullopt;
+  return head[25];
+}
+
+/// The size in the header of `path`, checked before anything is decoded: a file, of a known
+/// format, at most kMaxImageSide a side, `expected` when given, and not a colour PNG.
+void checkBeforeDecoding(const std::string& path, std::optional<cv::Size> expected) {
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status))
+    throw std::runtime_error("image '" + path + "' " +
+                             (status.type() == std::filesystem::file_type::not_found
+                                  ? std::string("does not exist")
+                                  : "cannot be read: " + error.message()));
+  if (!std::filesystem::is_regular_file(status))  // a folder, FIFO or device: never opened
+    throw std::runtime_error("image '" + path + "' is not a file (a folder, pipe or device)");
   const std::optional<cv::Size> size = imageFileSize(path);
   if (!size)
     throw std::runtime_error("image '" + path +
                              "' is corrupt or not a PNG, PNM, BMP, TIFF or JPEG image");
+  const std::string px = std::to_string(size->width) + "x" + std::to_string(size->height) + " px";
   if (size->width > kMaxImageSide || size->height > kMaxImageSide)
-    throw std::runtime_error("image '" + path + "' is " + std::to_string(size->width) + "x" +
-                             std::to_string(size->height) + " px, more than the limit of " +
+    throw std::runtime_error("image '" + path + "' is " + px + ", more than the limit of " +
                              std::to_string(kMaxImageSide) + " px a side");
+  if (expected && *size != *expected)
+    throw std::runtime_error("image '" + path + "' is " + px + ", not the calibration's " +
+                             std::to_string(expected->width) + "x" +
+                             std::to_string(expected->height) + " px");
+  const std::optional<int> colour = pngColourType(path);
+  if (colour && *colour != 0)  // decoding would take 3 or 4 times the memory of grey first
+    throw std::runtime_error("image '" + path + "' must be 8- or 16-bit grey (one channel), not " +
+                             "a colour PNG (colour type " + std::to_string(*colour) + ")");
+}
+
+}  // namespace
+
+cv::Mat readMonoImage(const std::string& path) { return readMonoImage(path, std::nullopt); }
+
+cv::Mat readMonoImage(const std::string& path, std::optional<cv::Size> expected) {
+  checkBeforeDecoding(path, expected);
   cv::Mat image;
   try {
     image = cv::imread(path, cv::IMREAD_UNCHANGED);

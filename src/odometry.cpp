@@ -1,5 +1,7 @@
 #include "multislit/odometry.h"
 
+#include "file_read.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -40,6 +42,12 @@ OdometrySample parseRow(const std::string& line, const std::string& at) {
     if (c.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v[k]))
       throw std::runtime_error(at + ": " + kFields[k] + " '" + c + "' is not a finite number");
   }
+  for (int k = 1; k <= 3; ++k)
+    if (std::abs(v[k]) > kMaxOdometryDistance)
+      throw std::runtime_error(at + ": " + kFields[k] + " '" + cells[static_cast<std::size_t>(k)] +
+                               "' is farther than " +
+                               std::to_string(static_cast<long>(kMaxOdometryDistance)) +
+                               " m from the origin");
   if (v[0] < 0 || v[0] > 9.0e18 || v[0] != std::floor(v[0]))
     throw std::runtime_error(at + ": stamp_us '" + cells[0] +
                              "' is not a whole number of microseconds >= 0");
@@ -80,6 +88,10 @@ Odometry::Odometry(std::vector<OdometrySample> samples, std::uint64_t max_gap_us
     const std::string which = "Odometry sample " + std::to_string(k) + " (" + describe(s) + ")";
     if (!s.world_from_robot.matrix().allFinite())
       throw std::invalid_argument(which + ": pose is not finite");
+    if (s.world_from_robot.translation().cwiseAbs().maxCoeff() > kMaxOdometryDistance)
+      throw std::invalid_argument(which + ": position is farther than " +
+                                  std::to_string(static_cast<long>(kMaxOdometryDistance)) +
+                                  " m from the origin");
     const Eigen::Matrix3d r = s.world_from_robot.linear();
     if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || r.determinant() < 0)
       throw std::invalid_argument(which + ": orientation is not a rotation");
@@ -94,8 +106,8 @@ Odometry::Odometry(std::vector<OdometrySample> samples, std::uint64_t max_gap_us
 }
 
 Odometry Odometry::load(const std::string& path, std::uint64_t max_gap_us) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot read the odometry file");
+  constexpr std::size_t kMaxBytes = std::size_t{1} << 30;
+  std::istringstream in(detail::readWholeFile(path, "odometry file", kMaxBytes));
   std::string line;
   if (!std::getline(in, line) || trimmed(line) != kHeader)
     throw std::runtime_error(path + ":1: the header must be '" + kHeader + "'");
@@ -114,7 +126,6 @@ Odometry Odometry::load(const std::string& path, std::uint64_t max_gap_us) {
                                " goes back from " + std::to_string(before) +
                                " (stamps must increase)");
   }
-  if (in.bad()) throw std::runtime_error(path + ": read error");
   if (samples.empty()) throw std::runtime_error(path + ": no poses after the header");
   return Odometry(std::move(samples), max_gap_us);
 }

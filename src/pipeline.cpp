@@ -1,6 +1,10 @@
 #include "multislit/pipeline.h"
 
+#include "multislit/odometry.h"
+
+#include <cmath>
 #include <ctime>
+#include <string>
 
 namespace multislit {
 
@@ -12,6 +16,30 @@ double lap(double& t0) {
   const double s = now - t0;
   t0 = now;
   return s;
+}
+
+/// Farthest a measured point may lie from the camera [m]: the sensor sees metres, not kilometres.
+constexpr float kMaxPointRange = 1000.0f;
+
+bool wild(float value) { return std::isinf(value) || std::abs(value) > kMaxPointRange; }
+
+/// Why nothing may be decided on the frame (PipelineResult::dropped), "" when it may.
+std::string unusable(const PipelineInput& in) {
+  if (!in.world_from_robot.matrix().allFinite() ||
+      in.world_from_robot.translation().cwiseAbs().maxCoeff() > kMaxOdometryDistance)
+    return "the robot's pose is not finite or beyond " +
+           std::to_string(static_cast<long>(kMaxOdometryDistance)) + " m";
+  if (in.robot_from_camera && !in.robot_from_camera->matrix().allFinite())
+    return "the camera's mount on the robot is not finite";
+  if (!in.cloud) return "";
+  for (std::size_t k = 0; k < in.cloud->size(); ++k) {
+    const PointRDM& p = (*in.cloud)[k];  // NaN: no point there
+    if (wild(p.x) || wild(p.y) || wild(p.z) || std::isinf(p.dk) || std::isinf(p.u) ||
+        std::isinf(p.v))
+      return "point " + std::to_string(k) + " is infinite or farther than " +
+             std::to_string(static_cast<int>(kMaxPointRange)) + " m (is the calibration right?)";
+  }
+  return "";
 }
 
 const PipelineConfig& validated(const PipelineConfig& config) {
@@ -49,6 +77,11 @@ PipelineResult Pipeline::process(const PipelineInput& in) {
   double t0 = threadCpuSeconds();
   const Eigen::Isometry3d robot_from_camera =
       in.robot_from_camera ? *in.robot_from_camera : geometry_.robotFromCamera();
+  r.dropped = unusable(in);
+  if (!r.dropped.empty()) {  // no decision on bad numbers: the walker stops, as for no floor
+    r.walker = walker_.step(map_, r.body, in.next_foot, WalkerObservation{});
+    return r;
+  }
   r.body = Pose2D::onFloor(in.world_from_robot);
   r.world_from_camera = in.world_from_robot * robot_from_camera;
   // Sec. III-B: the floor by RANSAC (eq. 1-3); points farther than 3 sigma are obstacle points.

@@ -22,8 +22,7 @@ void SensorConfig::validate() const {
   require(c.height >= 16 && c.height <= kMaxImageSide, "camera.height", sides);
   require(c.pixel_size > 0 && c.pixel_size < 1e-3, "camera.pixel_size", "must be in (0, 1e-3) m");
   require(c.focal_length > 0 && c.focal_length < 1.0, "camera.focal_length", "must be in (0, 1) m");
-  // Image rows and columns of rays are f times a tangent: f bounded keeps them in an int.
-  require(c.f() >= 1 && c.f() <= 1e6, "camera.focal_length",
+  require(c.f() >= kMinFocalPx && c.f() <= kMaxFocalPx, "camera.focal_length",
           "over pixel_size (f, the focal length in pixels) must be in [1, 1e6] px");
   require(c.principal_x < c.width, "camera.principal_x", "must lie inside the image");
   require(c.principal_y < c.height, "camera.principal_y", "must lie inside the image");
@@ -35,7 +34,7 @@ void SensorConfig::validate() const {
           "must be in (0, 80) deg");
   require(p.sheet_sigma > 0 && p.sheet_sigma < 0.05, "projector.sheet_sigma",
           "must be in (0, 0.05) rad");
-  require(p.baseline > 0 && p.baseline < 1.0, "projector.baseline", "must be in (0, 1) m");
+  require(p.baseline > 0 && p.baseline < kMaxBaseline, "projector.baseline", "must be in (0, 1) m");
   require(p.rotation >= 0 && p.rotation < 89, "projector.rotation", "must be in [0, 89) deg");
   // Each slit must cross every row at most once: dv/dt = f (cos(rho) + 2 sin(rho) k t) > 0.
   const double t_max = std::tan(p.slit_half_length * kDeg);

@@ -3,6 +3,8 @@
 
 #include "multislit/image_file.h"
 
+#include "frame_index.h"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -35,42 +37,17 @@ long long daysFromCivil(long long y, unsigned m, unsigned d) {
   return era * 146097 + static_cast<long long>(doe) - 719468;
 }
 
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) {
-    if (!cell.empty() && cell.back() == '\r') cell.pop_back();
-    cells.push_back(cell);
-  }
-  return cells;
-}
-
-// frames.csv of `folder` (written by `multislit simulate`): file name -> stamp_us. Empty when
-// missing or without file / stamp_us columns.
+// frames.csv of `folder` (written by `multislit simulate` and `walk --record`): file name ->
+// stamp_us, and the files in its order into `files`. Empty when there is none; throws naming
+// the line when it is wrong (detail::readFrameIndex).
 std::map<std::string, std::uint64_t> readIndexStamps(const fs::path& folder,
                                                      std::vector<std::string>* files = nullptr) {
   std::map<std::string, std::uint64_t> stamps;
-  std::ifstream in(folder / "frames.csv");
-  std::string line;
-  if (!in || !std::getline(in, line)) return stamps;
-  const std::vector<std::string> header = splitCsv(line);
-  const auto column = [&header](const char* name) {
-    return std::find(header.begin(), header.end(), name) - header.begin();
-  };
-  const auto file_col = static_cast<std::size_t>(column("file"));
-  const auto stamp_col = static_cast<std::size_t>(column("stamp_us"));
-  if (file_col >= header.size()) return stamps;
-  while (std::getline(in, line)) {
-    const std::vector<std::string> cells = splitCsv(line);
-    if (cells.size() <= file_col || cells[file_col].empty()) continue;
-    if (files) files->push_back((folder / cells[file_col]).string());
-    if (stamp_col >= cells.size()) continue;
-    try {
-      stamps[cells[file_col]] = std::stoull(cells[stamp_col]);
-    } catch (const std::exception&) {
-      // a row without a usable stamp keeps none
-    }
+  const auto rows = detail::readFrameIndex(folder);
+  if (!rows) return stamps;
+  for (const detail::FrameIndexRow& row : *rows) {
+    if (files) files->push_back((folder / row.file).string());
+    stamps[row.file] = row.stamp_us;
   }
   return stamps;
 }

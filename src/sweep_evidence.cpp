@@ -56,10 +56,10 @@ struct SweepEvidence::State {
     double run_first = 0.0;        ///< sweep at the first frame of the run [m]
     int best = 0;                  ///< the longest run
     double best_extent = 0.0;      ///< the sweep it covered [m]
-    void add(double sweep, std::uint64_t frame) {
-      run = frames > 0 && last_frame + 1 == frame ? run + 1 : 1;
+    void add(double sweep, std::uint64_t at_frame) {
+      run = frames > 0 && last_frame + 1 == at_frame ? run + 1 : 1;
       if (run == 1) run_first = sweep;
-      last_frame = frame;
+      last_frame = at_frame;
       ++frames;
       const double extent = std::abs(sweep - run_first);
       if (run > best || (run == best && extent > best_extent)) {

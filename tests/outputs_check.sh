@@ -23,7 +23,18 @@ cmp -s f.png f.orig.png && cmp -s c.yaml c.orig.yaml || fail "an input was chang
 mkdir -p a b && cp f.png a/ && cp f.png b/
 refused "would both be written to D/f.pcd" "$M" rdmap --calibration c.yaml --out D a/f.png b/f.png
 [[ ! -e D/f.pcd ]] || fail "rdmap wrote D/f.pcd anyway"
-echo "inputs: 5 clobbering commands refused, inputs unchanged"
+# A command's input YAML in its output folder, and an output that is a link (renaming over it
+# would replace the link; what it points to would stay as it was).
+cp s/scene.yaml s/scene.orig.yaml
+refused "is the input s/scene.yaml" "$M" simulate --scenario ball --scene s/scene.yaml --frames 1 \
+  --out s
+cmp -s s/scene.yaml s/scene.orig.yaml || fail "simulate rewrote its input s/scene.yaml"
+refused "is the input s/sensor.yaml" "$M" walk --sensor s/sensor.yaml --frames 1 --record s --out w0
+ln -s c.orig.yaml link.jsonl && ln -s /proc/self/fd/1 fd1.jsonl
+refused "link.jsonl is a symbolic link" "$M" detect --calibration c.yaml --out link.jsonl f.png
+refused "fd1.jsonl is a symbolic link" "$M" detect --calibration c.yaml --out fd1.jsonl f.png
+[[ -L link.jsonl && -L fd1.jsonl ]] && cmp -s c.yaml c.orig.yaml || fail "a link was replaced"
+echo "inputs: 9 clobbering commands refused, inputs unchanged"
 
 # 2. A full disk is an error, and leaves nothing cut.
 refused "could not write all of /dev/full" "$M" detect --calibration c.yaml --out /dev/full f.png
@@ -35,8 +46,28 @@ for _ in $(seq 1 40); do frames+=(f.png); done
 (trap '' XFSZ; ulimit -f 8; "$M" detect --calibration c.yaml --raw --out big.jsonl "${frames[@]}") \
   >out.log 2>&1 && fail "detect on a full disk reported success"
 [[ ! -e big.jsonl ]] || fail "a cut big.jsonl was left"
-[[ -z $(ls -A . | grep '\.part-') ]] || fail "temporary files left: $(ls -A | grep part)"
-echo "full disk: calibrate and detect fail, no output left"
+# map, simulate, walk --record and table1 on a full disk: an error, and no cut or empty file.
+full() {  # full NAME COMMAND...: fails with a file-size limit of 8 kB
+  local name=$1
+  shift
+  (trap '' XFSZ; ulimit -f 8; "$@") >"full_$name.log" 2>&1 &&
+    fail "$name on a full disk reported success"
+}
+no_cut_files() {  # every file in the folders is whole: not empty, PNGs end with IEND
+  local f
+  for f in $(find "$@" -type f 2>/dev/null); do
+    [[ -s $f ]] || fail "$f is empty"
+    [[ $f != *.png ]] || [[ $(tail -c 8 "$f" | head -c 4) == IEND ]] || fail "$f is cut"
+  done
+}
+full map "$M" map --sequence s --calibration c.yaml --out fm
+full simulate "$M" simulate --scenario ball --frames 20 --out fs
+full walk "$M" walk --frames 20 --record fr --out fw
+full table1 "$M" table1 --frames 2 --out ft
+no_cut_files fm fs fr fw ft
+[[ ! -e ft/table1.csv || -e ft/fig12.png ]] || fail "table1: no figure, yet the table"
+[[ -z $(find . -name '*.part-*') ]] || fail "temporary files left: $(find . -name '*.part-*')"
+echo "full disk: calibrate, detect, map, simulate, walk --record and table1 fail, no cut file"
 
 # interrupt NAME SECONDS COMMAND...: SIGINT after SECONDS; the command must exit with 130.
 # A script's background command ignores SIGINT until it sets its own handler, and a loaded
@@ -82,4 +113,8 @@ pngs=$(ls sim/frame_*.png | wc -l)
 [[ $(($(wc -l <sim/frames.csv) - 1)) == "$pngs" ]] || fail "frames.csv does not list the $pngs PNGs"
 whole_lines sim/odometry.csv 7
 echo "simulate: interrupted after $pngs frames, frames.csv and odometry.csv whole"
+interrupt table1 3 "$M" table1 --frames 1000 --out t1
+[[ ! -e t1/table1.csv && ! -e t1/fig12.png ]] || fail "table1: a table of part of the frames"
+interrupt bench 3 "$M" bench --frames 400 --passes 1000
+echo "table1, bench: interrupted, nothing written"
 echo "outputs_check: all checks passed"

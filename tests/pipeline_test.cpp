@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <tuple>
 
@@ -118,4 +119,47 @@ TEST(Pipeline, ConfigIsValidatedNamingTheStage) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("stop_frames"), std::string::npos) << e.what();
   }
+}
+
+// A corrupt calibration put points at +-inf, and `map` decided "walk, path clear" on them: a
+// frame with an infinite or far point, or a pose that is not finite, is dropped with a reason;
+// the walker stops as for no floor and the map learns nothing.
+TEST(Pipeline, FramesWithInfinitePointsOrPosesAreDroppedAndTheWalkerStops) {
+  WalkConfig walk_config;
+  walk_config.render = false;
+  WalkSimulation walk(walk_config);
+  const WalkFrame f = walk.step();
+  const auto input = [](pcl::PointCloud<PointRDM>::ConstPtr cloud, const Eigen::Isometry3d& pose) {
+    PipelineInput in;
+    in.cloud = std::move(cloud);
+    in.world_from_robot = pose;
+    return in;
+  };
+  Pipeline pipeline(walk_config.pipeline);
+  const PipelineResult good = pipeline.process(input(f.cloud, f.world_from_torso));
+  ASSERT_TRUE(good.dropped.empty()) << good.dropped;
+  ASSERT_TRUE(good.floor.found);
+  const std::size_t voxels = pipeline.map().leafCount();
+
+  auto bad = pcl::make_shared<pcl::PointCloud<PointRDM>>(*f.cloud);
+  std::size_t k = 0;
+  while (k < bad->size() && !hasXYZ((*bad)[k])) ++k;
+  ASSERT_LT(k, bad->size());
+  (*bad)[k].x = std::numeric_limits<float>::infinity();
+  const PipelineResult r = pipeline.process(input(bad, f.world_from_torso));
+  EXPECT_NE(r.dropped.find("point " + std::to_string(k) + " is infinite"), std::string::npos)
+      << r.dropped;
+  EXPECT_FALSE(r.floor.found);
+  EXPECT_EQ(r.walker.command, Command::Stop);
+  EXPECT_EQ(r.walker.reason, Reason::NoFloor);
+  EXPECT_EQ(pipeline.map().leafCount(), voxels);
+
+  (*bad)[k].x = 5000.0f;  // finite, but no sensor of this kind sees 5 km
+  EXPECT_NE(pipeline.process(input(bad, f.world_from_torso)).dropped.find("farther than 1000 m"),
+            std::string::npos);
+  Eigen::Isometry3d far = f.world_from_torso;
+  far.translation().x() = 1e12;
+  const PipelineResult lost = pipeline.process(input(f.cloud, far));
+  EXPECT_NE(lost.dropped.find("the robot's pose"), std::string::npos) << lost.dropped;
+  EXPECT_EQ(lost.walker.command, Command::Stop);
 }

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -89,6 +90,12 @@ TEST(Reference, OutOfRangeValuesAreRefusedNamingTheField) {
       {"region.yaml", "region_width", "region_width: 2000000000", "region_width"},
       {"dk_inf.yaml", "disparity_constant", "disparity_constant: .inf", "scale.disparity_constant"},
       {"f_inf.yaml", "f", "f: .inf", "scale.f"},
+      // Finite, but no sensor has them: rdmap wrote every point at +-inf, map decided on them.
+      {"cx_huge.yaml", "cx", "cx: 1e308", "scale.cx must lie inside the image"},
+      {"cy_outside.yaml", "cy", "cy: -5", "scale.cy must lie inside the image"},
+      {"f_tiny.yaml", "f", "f: 1e-320", "scale.f must be in [1, 1e6] px"},
+      {"dk_huge.yaml", "disparity_constant", "disparity_constant: 1e308",
+       "scale.disparity_constant over f (the baseline) must be in [0.001, 1] m, not 9.375e+304 m"},
       {"first_row.yaml", "first_row", "first_row: 2147483600", "slits[0].first_row"},
       {"big_image.yaml", "image_width", "image_width: 20000", "image_width"},
       {"unknown.yaml", "profile_width", "profil_width: 9.5", "unknown key 'profil_width'"},
@@ -98,6 +105,31 @@ TEST(Reference, OutOfRangeValuesAreRefusedNamingTheField) {
     const std::string error = loadError(c.name, edited(c.key, c.line));
     EXPECT_NE(error.find(c.name), std::string::npos) << c.name << ": " << error;  // the file
     EXPECT_NE(error.find(c.field), std::string::npos) << c.name << ": " << error;
+  }
+  Reference behind = good();
+  ASSERT_FALSE(behind.slits[0].u_inf.empty());
+  std::size_t j = 0;
+  while (!std::isfinite(behind.slits[0].u_inf[j])) ++j;
+  behind.slits[0].u_inf[j] = behind.slits[0].u[j] + 1.0f;  // the reference point behind the camera
+  try {
+    behind.validate();
+    FAIL() << "a reference point behind the sensor was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("slits[0].u_inf[" + std::to_string(j) + "]"),
+              std::string::npos)
+        << e.what();
+  }
+  // Every other slit's reference points moved 40 % farther: no longer one plane.
+  Reference bent = good();
+  for (std::size_t k = 1; k < bent.slits.size(); k += 2)
+    for (std::size_t i = 0; i < bent.slits[k].u_inf.size(); ++i)
+      bent.slits[k].u_inf[i] =
+          bent.slits[k].u[i] - (bent.slits[k].u[i] - bent.slits[k].u_inf[i]) / 1.4f;
+  try {
+    bent.validate();
+    FAIL() << "reference points off one plane were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mm rms off one plane"), std::string::npos) << e.what();
   }
   Reference outside = good();
   outside.slits[0].u[0] = 5000.0f;  // a column beyond the 1296 px image

@@ -19,7 +19,11 @@ std::optional<cv::Size> imageFileSize(const std::string& path);
 
 /// Reads an 8- or 16-bit one-channel image. Throws std::runtime_error naming the file when it is
 /// missing, not one of the formats above, larger than kMaxImageSide on a side (read from the
-/// header: nothing is decoded), corrupt, or of another type.
+/// header: nothing is decoded), a colour PNG (from the header too), corrupt, or of another type.
 cv::Mat readMonoImage(const std::string& path);
+/// The same, also refused before decoding when the header's size is not `expected` (the
+/// calibration's camera: a frame of another size could not be used, and decoding it first took
+/// its whole memory).
+cv::Mat readMonoImage(const std::string& path, std::optional<cv::Size> expected);
 
 }  // namespace multislit

@@ -15,6 +15,10 @@
 
 namespace multislit {
 
+/// Farthest a pose may be from the world's origin, on each axis [m]: a robot walks kilometres, and
+/// beyond this a position is a corrupt file (1e12 m), which no map or figure could hold.
+constexpr double kMaxOdometryDistance = 1e5;
+
 /// One pose of the robot at one time: world from robot.
 struct OdometrySample {
   std::uint64_t stamp_us = 0;  ///< [us]
@@ -32,13 +36,15 @@ const char* poseMissName(PoseMiss miss);
 
 class Odometry {
  public:
-  /// `samples` in strictly increasing time, with finite poses and rotations; two samples farther
+  /// `samples` in strictly increasing time, with finite poses within kMaxOdometryDistance and
+  /// rotations; two samples farther
   /// apart than `max_gap_us` are not interpolated between. Throws std::invalid_argument naming
   /// the first bad sample.
   explicit Odometry(std::vector<OdometrySample> samples, std::uint64_t max_gap_us = 500000);
   /// Reads the CSV file; throws std::runtime_error "FILE:LINE: what is wrong" (a missing or
-  /// wrong header, a short row, a number that is not one or not finite, a stamp that repeats or
-  /// goes back).
+  /// wrong header, a short row, a number that is not one or not finite, a position beyond
+  /// kMaxOdometryDistance, a stamp that repeats or goes back). A FIFO or pipe is read without
+  /// blocking for ever, up to 1 GiB.
   static Odometry load(const std::string& path, std::uint64_t max_gap_us = 500000);
 
   /// The pose at `stamp_us`: the sample itself at its own stamp, else linear in position and

@@ -68,6 +68,10 @@ struct PipelineResult {
   /// sudden obstacle that made it stop, if any.
   WalkerResult walker;
   PipelineTimes times;
+  /// Why the frame was dropped, "" when it was used: a pose or a point that is infinite or beyond
+  /// any range (a corrupt calibration or odometry). A dropped frame finds no floor, changes
+  /// nothing, and the walker stops as for no floor.
+  std::string dropped;
 };
 
 /// The chain, frame after frame: it keeps the map and the walker's state (a stop lasts its

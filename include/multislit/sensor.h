@@ -11,6 +11,12 @@
 
 namespace multislit {
 
+/// Focal lengths in pixels a real camera has [px]: f bounded keeps image rows and columns of rays
+/// (f times a tangent) in an int. Sensor files and calibrations are held to it.
+constexpr double kMinFocalPx = 1.0, kMaxFocalPx = 1e6;
+/// Longest projector baseline [m]; a calibration's (disparity_constant / f) is held to it too.
+constexpr double kMaxBaseline = 1.0;
+
 /// Pinhole camera without lens distortion. Pixel centres are at integer coordinates (OpenCV).
 struct CameraConfig {
   int width = 1296;              ///< [px]

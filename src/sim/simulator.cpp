@@ -179,6 +179,7 @@ void writeGroundTruthCsv(const std::string& path, const std::vector<SlitCrossing
         << t.world_point.y() << ',' << t.world_point.z() << ',' << t.object << ','
         << scene.objectName(t.object) << ',' << t.height << '\n';
   }
+  out.close();  // flushes: a full disk fails here
   if (!out) throw std::runtime_error("ground truth '" + path + "' could not be written completely");
 }
 
