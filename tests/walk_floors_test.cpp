@@ -26,8 +26,8 @@ struct Floor {
 };
 
 // Not here: dark-floor, whose reference the walk cannot calibrate (13 of 15 slits found), and of
-// the random draws 1001-1018 the four on which texture still becomes obstacles in the map: 1001
-// and 1010 (5 and 4 false voxels at the end), 1009 and 1015 (they turn away from false voxels);
+// the random draws 1001-1018 the four on which texture still becomes obstacles in the map: 1010
+// (4 false voxels at the end), 1001, 1009 and 1015 (they turn away from false voxels);
 // docs/walk.md. The rule does not yet hold on every floor.
 std::vector<Floor> floors() {
   std::vector<Floor> all;
