@@ -1,9 +1,15 @@
 #include "walk_sweep.h"
 
+#include "plot.h"
+
 #include "multislit/sim/truth.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 namespace multislit::apps {
 
@@ -51,7 +57,8 @@ void writeSweepPassHeader(std::ostream& csv) {
          "max_height_mm,strong,verdict,object\n";
 }
 
-void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map) {
+void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map,
+                      SweepRuns& runs) {
   std::vector<SceneObject> objects;
   for (const ObjectView& o : f.objects) objects.push_back(o.object);
   const octomap::OcTree& tree = map.tree();
@@ -68,7 +75,27 @@ void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap&
                   1e3 * p.below_sweep, 1e3 * p.max_height, p.strong ? 1 : 0,
                   kVerdicts[static_cast<int>(p.verdict)], o ? o->name.c_str() : "none");
     csv << line;
+    if (p.above_run > 0)
+      ++(o ? runs.object : runs.floor)[std::min(p.above_run, SweepRuns::kBins) - 1];
   }
+}
+
+void drawSweepRuns(const std::string& path, const SweepRuns& runs) {
+  std::vector<std::string> labels;
+  std::vector<double> shares;
+  const auto add = [&](const char* kind, const std::size_t* counts) {
+    std::size_t all = 0;
+    for (int i = 0; i < SweepRuns::kBins; ++i) all += counts[i];
+    for (int i = 0; i < SweepRuns::kBins; ++i) {
+      labels.push_back(std::string(kind) + " " + std::to_string(i + 1) +
+                       (i + 1 == SweepRuns::kBins ? "+" : ""));
+      shares.push_back(all > 0 ? 100.0 * static_cast<double>(counts[i]) / all : 0.0);
+    }
+  };
+  add("floor", runs.floor);
+  add("object", runs.object);
+  drawBarChart(path, "passes above the floor, by their longest run of frames in a row",
+               "% of the passes of the kind", labels, shares);
 }
 
 std::size_t falseVoxels(const OccupancyMap& map, const std::vector<SceneObject>& objects) {

@@ -6,7 +6,9 @@
 #include "multislit/occupancy_map.h"
 #include "multislit/sim/walk.h"
 
+#include <cstddef>
 #include <ostream>
+#include <string>
 #include <vector>
 
 namespace multislit::apps {
@@ -15,9 +17,20 @@ namespace multislit::apps {
 /// robot, so that it walks straight over whatever its floor shows.
 void measureSweep(WalkConfig& config);
 
+/// The passes of a measurement with evidence above the floor, counted by their longest run of
+/// consecutive frames above it (1, 2, 3, 4, 5 or more), where no object lies and on an object.
+struct SweepRuns {
+  static constexpr int kBins = 5;
+  std::size_t floor[kBins] = {}, object[kBins] = {};
+};
+
 void writeSweepPassHeader(std::ostream& csv);
-/// The passes that ended in frame `f`, each with the object within 15 mm of its place, if any.
-void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map);
+/// The passes that ended in frame `f`, each with the object within 15 mm of its place, if any;
+/// counted into `runs`.
+void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map,
+                      SweepRuns& runs);
+/// The histogram of `runs` as a bar chart (PNG): each bar the share of its kind's passes.
+void drawSweepRuns(const std::string& path, const SweepRuns& runs);
 
 /// The object nearest to a square cell of edge `size` at `centre`, seen from above, within
 /// `reach` [m]; nullptr when there is none.
