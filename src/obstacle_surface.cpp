@@ -1,5 +1,7 @@
 #include "obstacle_surface.h"
 
+#include "multislit/plane_model.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -14,10 +16,7 @@ pcl::Indices surfacePoints(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices 
   const auto at = [&](std::size_t j) -> const PointRDM& {
     return cloud[static_cast<std::size_t>(group[j])];
   };
-  const auto above = [&](std::size_t j) {
-    const PointRDM& p = at(j);
-    return p.dk > plane[0] * p.u + plane[1] * p.v + plane[2];
-  };
+  const auto above = [&](std::size_t j) { return planeResidual(at(j), plane) > 0; };
   // Each point continues the run of the nearest point before it, at most 2 cells back on its
   // slit, on its side of the floor and within max_step of its dk.
   const std::size_t n = group.size();
