@@ -169,8 +169,7 @@ std::vector<int> runLengths(const pcl::PointCloud<PointRDM>& cloud, const pcl::I
                             const Eigen::Vector3d* plane) {
   const auto width = static_cast<pcl::index_t>(cloud.width);
   const auto above = [&](pcl::index_t i) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    return p.dk > (*plane)[0] * p.u + (*plane)[1] * p.v + (*plane)[2];
+    return planeResidual(cloud[static_cast<std::size_t>(i)], *plane) > 0;
   };
   std::vector<int> length(sorted.size());
   std::size_t start = 0;
