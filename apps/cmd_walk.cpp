@@ -51,10 +51,10 @@ void declareWalkOptions(cli::ArgParser& args) {
   args.option("record", "",
               "DIR: also write the walk as a recording (frames, odometry.csv, calibration.yaml) "
               "that multislit map --sequence DIR replays");
-  args.flag(
-      "measure-sweep",
-      "walk straight whatever the map holds and write each pass of the slits over a place "
-      "with evidence to sweep_passes.csv, and their histogram to sweep_runs.png (docs/walk.md)");
+  args.flag("measure-sweep",
+            "walk straight whatever the map holds and write each pass of the slits over a place "
+            "with evidence to sweep_passes.csv, and their histograms to sweep_runs.png, "
+            "sweep_balance.png, sweep_extent.png and sweep_histograms.csv (docs/walk.md)");
   args.flag("no-ball", "no ball is thrown in");
   args.flag("no-cable", "no LAN cable on the floor");
   args.flag("synthesize",
@@ -340,7 +340,7 @@ int runWalk(int argc, char** argv) {
   r.csv = &csv.stream();
   writeWalkCsvHeader(*r.csv);
   std::optional<OutputFile> passes;
-  SweepRuns runs;
+  SweepHistograms histograms;
   if (args.has("measure-sweep")) {
     passes.emplace(out / "sweep_passes.csv");
     writeSweepPassHeader(passes->stream());
@@ -356,7 +356,7 @@ int runWalk(int argc, char** argv) {
     const WalkFrame f = walk.step();
     if (recording) recording->add(f.image, f.stamp_us, f.world_from_torso);
     record(r, f, walk);
-    if (passes) writeSweepPasses(passes->stream(), f, walk.map(), runs);
+    if (passes) writeSweepPasses(passes->stream(), f, walk.map(), histograms);
     trackBall(r, f, walk);
     progress.update(static_cast<std::size_t>(k + 1));
   }
@@ -365,7 +365,7 @@ int runWalk(int argc, char** argv) {
   csv.commit();
   if (passes) {
     passes->commit();
-    drawSweepRuns((out / "sweep_runs.png").string(), runs);
+    writeSweepHistograms(out.string(), histograms);
   }
   writeFigures(r, walk, out);
   const double seconds =

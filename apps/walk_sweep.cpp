@@ -1,5 +1,6 @@
 #include "walk_sweep.h"
 
+#include "output_file.h"
 #include "plot.h"
 
 #include "multislit/sim/truth.h"
@@ -8,6 +9,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <filesystem>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -58,7 +61,7 @@ void writeSweepPassHeader(std::ostream& csv) {
 }
 
 void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap& map,
-                      SweepRuns& runs) {
+                      SweepHistograms& histograms) {
   std::vector<SceneObject> objects;
   for (const ObjectView& o : f.objects) objects.push_back(o.object);
   const octomap::OcTree& tree = map.tree();
@@ -75,27 +78,81 @@ void writeSweepPasses(std::ostream& csv, const WalkFrame& f, const OccupancyMap&
                   1e3 * p.below_sweep, 1e3 * p.max_height, p.strong ? 1 : 0,
                   kVerdicts[static_cast<int>(p.verdict)], o ? o->name.c_str() : "none");
     csv << line;
-    if (p.above_run > 0)
-      ++(o ? runs.object : runs.floor)[std::min(p.above_run, SweepRuns::kBins) - 1];
+    histograms.add(p, o != nullptr);
   }
 }
 
-void drawSweepRuns(const std::string& path, const SweepRuns& runs) {
+void SweepHistograms::add(const SweepPass& p, bool on_object) {
+  Counts& c = on_object ? object : floor;
+  if (p.above_run > 0) ++c.run[std::min(p.above_run, kRunBins) - 1];
+  const int frames = p.above_frames + p.below_frames;
+  if (frames == 0) return;
+  const double balance = static_cast<double>(p.above_frames - p.below_frames) / frames;
+  ++c.balance[balance < -0.6   ? 0
+              : balance < -0.2 ? 1
+              : balance <= 0.2 ? 2
+              : balance <= 0.6 ? 3
+                               : 4];
+  const double mm = 1e3 * (p.above_frames >= p.below_frames ? p.above_sweep : p.below_sweep);
+  static constexpr double kEdges[] = {1, 2, 3, 5, 10};
+  ++c.extent[std::upper_bound(std::begin(kEdges), std::end(kEdges), std::abs(mm)) -
+             std::begin(kEdges)];
+}
+
+namespace {
+
+/// One histogram of both kinds: its labels, the share of each kind's passes per bin, the counts.
+struct Histogram {
+  const char* name;
+  const char* title;
+  std::vector<const char*> bins;
+  const std::size_t* floor;
+  const std::size_t* object;
+};
+
+void drawHistogram(const std::string& path, const Histogram& h) {
   std::vector<std::string> labels;
   std::vector<double> shares;
   const auto add = [&](const char* kind, const std::size_t* counts) {
     std::size_t all = 0;
-    for (int i = 0; i < SweepRuns::kBins; ++i) all += counts[i];
-    for (int i = 0; i < SweepRuns::kBins; ++i) {
-      labels.push_back(std::string(kind) + " " + std::to_string(i + 1) +
-                       (i + 1 == SweepRuns::kBins ? "+" : ""));
+    for (std::size_t i = 0; i < h.bins.size(); ++i) all += counts[i];
+    for (std::size_t i = 0; i < h.bins.size(); ++i) {
+      labels.push_back(std::string(kind) + " " + h.bins[i]);
       shares.push_back(all > 0 ? 100.0 * static_cast<double>(counts[i]) / all : 0.0);
     }
   };
-  add("floor", runs.floor);
-  add("object", runs.object);
-  drawBarChart(path, "passes above the floor, by their longest run of frames in a row",
-               "% of the passes of the kind", labels, shares);
+  add("floor", h.floor);
+  add("object", h.object);
+  drawBarChart(path, h.title, "% of the passes of the kind", labels, shares);
+}
+
+}  // namespace
+
+void writeSweepHistograms(const std::string& folder, const SweepHistograms& s) {
+  const Histogram histograms[] = {
+      {"runs",
+       "passes above the floor, by their longest run of frames in a row",
+       {"1", "2", "3", "4", "5+"},
+       s.floor.run,
+       s.object.run},
+      {"balance",
+       "passes by sign balance: (frames above - below) / frames",
+       {"<-0.6", "-0.6..-0.2", "-0.2..0.2", "0.2..0.6", ">0.6"},
+       s.floor.balance,
+       s.object.balance},
+      {"extent",
+       "passes by the sweep of their longest one-signed run [mm]",
+       {"<1", "1-2", "2-3", "3-5", "5-10", "10+"},
+       s.floor.extent,
+       s.object.extent}};
+  OutputFile csv(std::filesystem::path(folder) / "sweep_histograms.csv");
+  csv.stream() << "histogram,bin,floor_passes,object_passes\n";
+  for (const Histogram& h : histograms) {
+    drawHistogram(folder + "/sweep_" + h.name + ".png", h);
+    for (std::size_t i = 0; i < h.bins.size(); ++i)
+      csv.stream() << h.name << ',' << h.bins[i] << ',' << h.floor[i] << ',' << h.object[i] << '\n';
+  }
+  csv.commit();
 }
 
 std::size_t falseVoxels(const OccupancyMap& map, const std::vector<SceneObject>& objects) {

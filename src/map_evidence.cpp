@@ -2,8 +2,11 @@
 
 #include "multislit/plane_model.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace multislit::detail {
 
@@ -110,8 +113,37 @@ void SlitSweep::add(std::size_t index, int slit, const Eigen::Vector2d& world) {
   now_xy_.push_back(world.cast<float>());
 }
 
-double SlitSweep::finish() {
+namespace {
+
+/// The least-squares affine fit move = a + b . (at - centre) over the points whose residual from
+/// `previous` is within `keep` [m] (all points when keep is infinite); false when they do not
+/// spread over the floor in two directions.
+bool fitAffine(const std::vector<float>& moves, const std::vector<Eigen::Vector2f>& at,
+               const Eigen::Vector2d& centre, const Eigen::Vector3d& previous, double keep,
+               Eigen::Vector3d& fit) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < moves.size(); ++j) {
+    const Eigen::Vector3d row(1.0, at[j].x() - centre.x(), at[j].y() - centre.y());
+    if (!(std::abs(moves[j] - row.dot(previous)) <= keep)) continue;
+    normal += row * row.transpose();
+    rhs += row * static_cast<double>(moves[j]);
+  }
+  constexpr double kMinSpread = 1e-4;  // (1 cm)^2: the points lie along more than a line
+  if (normal(0, 0) < 20 || Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                               normal.bottomRightCorner<2, 2>() / normal(0, 0))
+                                   .eigenvalues()
+                                   .minCoeff() < kMinSpread)
+    return false;
+  fit = normal.ldlt().solve(rhs);
+  return fit.allFinite();
+}
+
+}  // namespace
+
+SweepStep SlitSweep::finish(double dead_zone) {
   moves_.clear();
+  moved_at_.clear();
   Eigen::Vector2d across = Eigen::Vector2d::Zero();
   if (first_count_ > 0 && last_count_ > 0 && last_slit_ > first_slit_)
     across = last_sum_ / static_cast<double>(last_count_) -
@@ -119,16 +151,45 @@ double SlitSweep::finish() {
   const bool has_across = across.norm() > 1e-3;
   if (has_across) across.normalize();
   const Eigen::Vector2f n = across.cast<float>();
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (std::size_t j = 0; j < now_.size(); ++j) {
     Seen& s = seen_[now_[j]];
-    if (has_across && s.frame + 1 == frame_)
+    if (has_across && s.frame + 1 == frame_) {
       moves_.push_back((now_xy_[j] - Eigen::Vector2f(s.x, s.y)).dot(n));
+      moved_at_.push_back(now_xy_[j]);
+      centre += now_xy_[j].cast<double>();
+    }
     s = Seen{now_xy_[j].x(), now_xy_[j].y(), frame_};
   }
-  if (moves_.size() < 20) return 0.0;
-  const auto mid = moves_.begin() + static_cast<std::ptrdiff_t>(moves_.size() / 2);
-  std::nth_element(moves_.begin(), mid, moves_.end());
-  return static_cast<double>(*mid);
+  SweepStep step;
+  if (moves_.size() < 20) return step;
+  centre /= static_cast<double>(moves_.size());
+  // Fit all, then again without the points far off the first fit (a point that jumped to another
+  // place on its slit: an edge of the view, an object).
+  Eigen::Vector3d fit = Eigen::Vector3d::Zero();
+  if (!fitAffine(moves_, moved_at_, centre, fit, std::numeric_limits<double>::infinity(), fit))
+    return step;
+  residuals_.clear();
+  for (std::size_t j = 0; j < moves_.size(); ++j)
+    residuals_.push_back(
+        std::abs(moves_[j] - static_cast<float>(fit[0] + fit[1] * (moved_at_[j].x() - centre.x()) +
+                                                fit[2] * (moved_at_[j].y() - centre.y()))));
+  const auto mid = residuals_.begin() + static_cast<std::ptrdiff_t>(residuals_.size() / 2);
+  std::nth_element(residuals_.begin(), mid, residuals_.end());
+  constexpr double kMinKeep = 2e-4;  // [m]: below the points' own noise, nothing is an outlier
+  const double keep = std::max(kMinKeep, 3.0 * 1.4826 * static_cast<double>(*mid));
+  if (!fitAffine(moves_, moved_at_, centre, fit, keep, fit)) return step;
+  // The largest move in the view: below the dead zone, the slits did not move.
+  double largest = 0.0;
+  for (const Eigen::Vector2f& at : moved_at_)
+    largest = std::max(largest, std::abs(fit[0] + fit[1] * (at.x() - centre.x()) +
+                                         fit[2] * (at.y() - centre.y())));
+  if (largest <= dead_zone) return step;
+  step.per_x = fit[1];
+  step.per_y = fit[2];
+  step.offset = fit[0] - fit[1] * centre.x() - fit[2] * centre.y();
+  step.middle = fit[0];
+  return step;
 }
 
 }  // namespace multislit::detail

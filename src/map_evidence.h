@@ -60,19 +60,21 @@ struct FrameEvidence {
                            const OccupancyMapConfig& config);
 };
 
-/// How far the slits moved across themselves on the floor since the previous frame: the median,
-/// over the points seen in both frames, of their move along the direction from the first slit to
-/// the last. A point of the RDMap is one reference point, so the same index is the same slit
-/// point. Walking moves the slits across; standing does not; turning in place moves them mostly
-/// along themselves.
+/// How far the slits moved across themselves on the floor since the previous frame, at each place:
+/// the moves of the points seen in both frames along the direction from the first slit to the
+/// last, fitted by an affine function of the place (a rigid move of the robot over the floor
+/// moves the slits so: alike everywhere when walking, in proportion to the distance from the
+/// turning axis when turning), far outliers left out. A point of the RDMap is one reference point,
+/// so the same index is the same slit point. Standing does not move the slits.
 class SlitSweep {
  public:
   /// Starts a frame of `size` points.
   void begin(std::size_t size);
   /// A floor point of the frame: its index, slit and world x, y [m].
   void add(std::size_t index, int slit, const Eigen::Vector2d& world);
-  /// The move since the previous frame [m] (0 without one); this frame becomes the previous.
-  double finish();
+  /// The move since the previous frame at world x, y [m per m] (zero without a previous frame, or
+  /// when it is nowhere in the view larger than `dead_zone` [m]); this frame becomes the previous.
+  SweepStep finish(double dead_zone);
 
  private:
   struct Seen {
@@ -87,6 +89,8 @@ class SlitSweep {
   std::vector<std::uint32_t> now_;  ///< indices seen this frame
   std::vector<Eigen::Vector2f> now_xy_;
   std::vector<float> moves_;
+  std::vector<Eigen::Vector2f> moved_at_;  ///< where each of moves_ was measured
+  std::vector<float> residuals_;           ///< of moves_ from the first fit
 };
 
 }  // namespace multislit::detail

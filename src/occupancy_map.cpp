@@ -23,6 +23,17 @@ namespace {
 
 bool isProbability(double p) { return p > 0 && p < 1; }
 
+/// A move of the slits at world x, y [m] as a move at map column x, y [cells].
+SweepStep columnStep(const SweepStep& world, const octomap::OcTree& tree) {
+  const double origin = tree.keyToCoord(octomap::key_type{0});  // world x or y of column 0 [m]
+  const double cell = tree.getResolution();
+  SweepStep column = world;
+  column.offset = world.offset + (world.per_x + world.per_y) * origin;
+  column.per_x = world.per_x * cell;
+  column.per_y = world.per_y * cell;
+  return column;
+}
+
 octomap::point3d toOcto(const Eigen::Vector3d& p) {
   return octomap::point3d(static_cast<float>(p.x()), static_cast<float>(p.y()),
                           static_cast<float>(p.z()));
@@ -178,7 +189,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
     last_ray = key;
     last_slit = p.slit;
   }
-  sweep_->beginFrame(slit_sweep_->finish());
+  sweep_->beginFrame(columnStep(slit_sweep_->finish(config_.sweep.dead_zone), *tree_));
   markEvidence(e);
 }
 

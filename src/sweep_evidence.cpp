@@ -43,6 +43,7 @@ void SweepEvidenceConfig::validate() const {
   require(min_passes >= 1 && min_passes <= 1000, "min_passes", "must be in [1, 1000]");
   require(weak_passes >= 1 && weak_passes <= 1000, "weak_passes", "must be in [1, 1000]");
   require(line_radius >= 0 && line_radius <= 100, "line_radius", "must be in [0, 100] columns");
+  require(lobe_radius >= 0 && lobe_radius <= 100, "lobe_radius", "must be in [0, 100] columns");
   require(std::isfinite(forget_sweep) && forget_sweep > pass_gap && forget_sweep <= 100,
           "forget_sweep", "must be in (pass_gap, 100] m");
 }
@@ -116,6 +117,9 @@ struct SweepEvidence::State {
   static void update(Place& place, const FrameFlags& flags, const SweepEvidenceConfig& c,
                      double sweep, std::uint64_t frame);
   SweepVerdict judge(std::uint64_t key, const Place& place, const SweepEvidenceConfig& c) const;
+  /// Whether a place within lobe_radius of `key` holds a dark line's other lobe: evidence above
+  /// the floor beside a hole (`above`), consistent evidence below it beside an object.
+  bool nearOtherLobe(std::uint64_t key, bool above, const SweepEvidenceConfig& c) const;
   /// Whether a column within `radius` of `key` was sunk this frame or the last.
   bool nearSunk(std::uint64_t key, int radius) const;
   /// Tall evidence beside strong evidence below the floor is dropped (a dark line's lobes).
@@ -150,12 +154,26 @@ SweepEvidence::~SweepEvidence() = default;
 std::size_t SweepEvidence::places() const { return state_->places.size(); }
 
 void SweepEvidence::beginFrame(double step) {
+  SweepStep uniform;
+  if (std::abs(step) > config_.dead_zone) uniform.offset = uniform.middle = step;
+  beginFrame(uniform);
+}
+
+void SweepEvidence::beginFrame(const SweepStep& step) {
   ++frame_;
-  if (std::isfinite(step) && std::abs(step) > config_.dead_zone) sweep_ += step;
+  const bool finite = std::isfinite(step.offset) && std::isfinite(step.per_x) &&
+                      std::isfinite(step.per_y) && std::isfinite(step.middle);
+  if (finite) {
+    total_.offset += step.offset;
+    total_.per_x += step.per_x;
+    total_.per_y += step.per_y;
+    sweep_ += step.middle;
+  }
   if (frame_ % kForgetInterval != 0) return;
   // Evidence the slits have left far behind: forgotten.
   state_->forget([&](const auto& place) {
-    return std::abs(sweep_ - place.second.last) > config_.forget_sweep;
+    return std::abs(sweepAt(columnX(place.first), columnY(place.first)) - place.second.last) >
+           config_.forget_sweep;
   });
 }
 
@@ -175,9 +193,10 @@ void SweepEvidence::addEvidence(const std::vector<SweepPoint>& points) {
   s.dropBesideLines(config_);
   for (const auto& [key, f] : s.frame) {
     State::Place& place = s.places[key];
-    if (place.in_pass && std::abs(sweep_ - place.last) > config_.pass_gap)
+    const double sweep = sweepAt(columnX(key), columnY(key));
+    if (place.in_pass && std::abs(sweep - place.last) > config_.pass_gap)
       s.endPass(key, place, config_);
-    State::update(place, f, config_, sweep_, frame_);
+    State::update(place, f, config_, sweep, frame_);
     place.verdict = s.judge(key, place, config_);
   }
 }
@@ -224,12 +243,30 @@ void SweepEvidence::State::update(Place& p, const FrameFlags& f, const SweepEvid
 
 SweepVerdict SweepEvidence::State::judge(std::uint64_t key, const Place& p,
                                          const SweepEvidenceConfig& c) const {
-  if (p.tall_run >= c.tall_frames ||
-      p.above_passes + consistent(p.above, p.below, c) >= c.min_passes ||
+  const bool above = p.above_passes + consistent(p.above, p.below, c) >= c.min_passes;
+  const bool below = p.below_passes + consistent(p.below, p.above, c) >= c.min_passes;
+  if (p.tall_run >= c.tall_frames || (above && !nearOtherLobe(key, false, c)) ||
       (p.weak_passes >= c.weak_passes && !onWeakLine(key)))
     return SweepVerdict::Above;
-  if (p.below_passes + consistent(p.below, p.above, c) >= c.min_passes) return SweepVerdict::Below;
+  if (below && !nearOtherLobe(key, true, c)) return SweepVerdict::Below;
   return SweepVerdict::Pending;
+}
+
+bool SweepEvidence::State::nearOtherLobe(std::uint64_t key, bool above,
+                                         const SweepEvidenceConfig& c) const {
+  const int r = c.lobe_radius;
+  for (int dx = -r; dx <= r; ++dx)
+    for (int dy = -r; dy <= r; ++dy) {
+      const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
+      if (it == places.end() || (dx == 0 && dy == 0)) continue;
+      const Place& q = it->second;
+      // Beside a hole, anything above the floor is a line's other lobe; an object is known by
+      // consistent evidence below beside it.
+      if (above ? q.above_passes > 0 || q.weak_passes > 0 || (q.in_pass && q.above.frames > 0)
+                : q.below_passes > 0 || consistent(q.below, q.above, c))
+        return true;
+    }
+  return false;
 }
 
 void SweepEvidence::State::dropBesideLines(const SweepEvidenceConfig& c) {
@@ -254,11 +291,19 @@ bool SweepEvidence::State::nearSunk(std::uint64_t key, int radius) const {
 }
 
 bool SweepEvidence::State::onWeakLine(std::uint64_t key) const {
+  // A neighbour with evidence above the floor: weak passes, or the pass under way.
   const auto weak = [&](int dx, int dy) {
     const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
-    return it != places.end() && it->second.weak_passes > 0;
+    if (it == places.end()) return false;
+    const Place& p = it->second;
+    return p.weak_passes > 0 || (p.in_pass && p.above.frames > 0);
   };
-  return (weak(-1, 0) && weak(1, 0)) || (weak(0, -1) && weak(0, 1));
+  // A line at an angle to the map's axes steps over to the next row or column of cells.
+  const auto weakAcross = [&](int dx, int dy) {  // (dx, dy) or a cell beside it, across
+    const int sx = std::abs(dy), sy = std::abs(dx);
+    return weak(dx, dy) || weak(dx + sx, dy + sy) || weak(dx - sx, dy - sy);
+  };
+  return (weakAcross(-1, 0) && weakAcross(1, 0)) || (weakAcross(0, -1) && weakAcross(0, 1));
 }
 
 SweepVerdict SweepEvidence::verdictAt(std::int32_t x, std::int32_t y) const {

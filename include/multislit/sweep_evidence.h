@@ -44,6 +44,11 @@ struct SweepEvidenceConfig {
   int line_radius = 3;
   /// Consistent passes in a row, i.e. slits one after the other, that occupy a place [-]
   int min_passes = 2;
+  /// ... unless a place within this many columns holds the other lobe of a dark line, which pulls
+  /// the stripe above the floor on one side of it and below on the other, where an object lifts
+  /// it on one side only and a hole sinks it: beside an object, consistent evidence below the
+  /// floor; beside a hole, any evidence above it [columns]. 0: no such rule.
+  int lobe_radius = 2;
   /// Passes in a row with only weak evidence (below the obstacle threshold), above the floor and
   /// never below, that occupy a place (a screw a few mm high) [-]
   int weak_passes = 6;
@@ -63,6 +68,18 @@ struct SweepPoint {
   /// Of an obstacle group, and higher than texture lobes mostly reach
   /// (SweepEvidenceConfig::tall_height): a ball, a box.
   bool tall = false;
+};
+
+/// How far the slits moved across themselves since the previous frame, at each column: walking
+/// moves them alike everywhere; turning in place moves them along their own length in front of
+/// the robot and across themselves to its sides. The move at column (x, y) is
+/// offset + per_x * x + per_y * y [m], columns in cells.
+struct SweepStep {
+  double offset = 0.0;  ///< [m]
+  double per_x = 0.0;   ///< [m per cell]
+  double per_y = 0.0;   ///< [m per cell]
+  double middle = 0.0;  ///< the move at the middle of the view [m]
+  double at(double x, double y) const { return offset + per_x * x + per_y * y; }
 };
 
 /// What the sweep says of a column this frame.
@@ -96,14 +113,20 @@ class SweepEvidence {
 
   const SweepEvidenceConfig& config() const { return config_; }
 
-  /// Starts a frame whose slits moved `step` across themselves since the previous frame [m].
+  /// Starts a frame whose slits moved `step` across themselves since the previous frame [m],
+  /// alike at every column.
   void beginFrame(double step);
+  /// Starts a frame whose slits moved `step` across themselves, per column.
+  void beginFrame(const SweepStep& step);
   /// Judges the frame's evidence; the verdict of each point's column is then verdictAt().
   void addEvidence(const std::vector<SweepPoint>& points);
   SweepVerdict verdictAt(std::int32_t x, std::int32_t y) const;
 
-  double sweep() const { return sweep_; }  ///< the slits' travel so far [m]
-  std::size_t places() const;              ///< places holding evidence [-]
+  /// The slits' travel so far at the middle of the view (the frames' `SweepStep::middle`) [m].
+  double sweep() const { return sweep_; }
+  /// The slits' travel so far across column (x, y) [m].
+  double sweepAt(std::int32_t x, std::int32_t y) const { return total_.at(x, y); }
+  std::size_t places() const;  ///< places holding evidence [-]
   /// Forgets the places farther than `half_size` cells from (x, y) along either axis.
   void crop(std::int32_t x, std::int32_t y, std::int32_t half_size);
   std::vector<SweepPass> takePasses();  ///< the passes ended since the last call
@@ -114,6 +137,7 @@ class SweepEvidence {
   SweepEvidenceConfig config_;
   std::unique_ptr<State> state_;
   double sweep_ = 0.0;
+  SweepStep total_;  ///< the sum of the frames' steps
   std::uint64_t frame_ = 0;
 };
 

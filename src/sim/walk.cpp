@@ -147,7 +147,11 @@ std::uint64_t WalkSimulation::stamp() const {
   return static_cast<std::uint64_t>(static_cast<double>(frame_) * 1e6 / config_.gait.frame_rate);
 }
 
-WalkFrame WalkSimulation::step() {
+WalkFrame WalkSimulation::step() { return step(std::optional<Command>{}); }
+
+WalkFrame WalkSimulation::step(Command forced) { return step(std::optional<Command>(forced)); }
+
+WalkFrame WalkSimulation::step(const std::optional<Command>& forced) {
   WalkFrame f;
   f.frame = frame_;
   f.stamp_us = stamp();
@@ -167,7 +171,8 @@ WalkFrame WalkSimulation::step() {
       pipeline_.process({m.cloud, gait_.worldFromRobot(), robot_from_camera, gait_.nextFoot()});
   f.process_seconds = f.times.total();
   // The robot moves: its pose integrates its own commands.
-  f.footstep = gait_.advance(f.walker.command, f.walker.turn_direction);
+  f.footstep =
+      forced ? gait_.advance(*forced, 1) : gait_.advance(f.walker.command, f.walker.turn_direction);
   f.motion = gait_.command();
   judge(scene, m.truth, f);
   ++frame_;

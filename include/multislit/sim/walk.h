@@ -124,6 +124,9 @@ class WalkSimulation {
   ~WalkSimulation();
 
   WalkFrame step();
+  /// A frame in which the body does `forced` (a turn: to the left) whatever the walker decided:
+  /// to try the map on a turn in place or on standing still.
+  WalkFrame step(Command forced);
   std::uint64_t frame() const { return frame_; }
   const OccupancyMap& map() const { return pipeline_.map(); }
   const Pipeline& pipeline() const { return pipeline_; }
@@ -135,6 +138,7 @@ class WalkSimulation {
 
  private:
   struct Measurement;
+  WalkFrame step(const std::optional<Command>& forced);
   std::uint64_t stamp() const;  ///< of the frame now [us]
   Measurement measure(const Scene& scene, const Eigen::Isometry3d& world_from_camera);
   void judge(const Scene& scene, const std::vector<SlitCrossing>& truth, WalkFrame& f) const;
