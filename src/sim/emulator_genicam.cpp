@@ -1,3 +1,4 @@
+// The emulated camera's GenICam description: Aravis's fake camera's, with Mono12 and PTP added.
 #include "emulator_genicam.h"
 
 #include "aravis_util.h"
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace multislit::emulator {
@@ -61,10 +63,10 @@ std::string emulatorGenicam(const std::string& serial) {
   if (data == nullptr)
     throw std::runtime_error("the Aravis fake camera has no GenICam description");
   std::string xml(data, size);
-  // ARV_PIXEL_FORMAT_MONO_12 (0x01100005): 12 bits a pixel, sent in 16.
+  // Mono12: 12 bits a pixel, sent in 16.
   insertBefore(xml, "<pValue>PixelFormatRegister</pValue>",
-               "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\">\n"
-               "\t\t\t<Value>17825797</Value>\n\t\t</EnumEntry>\n\t\t");
+               "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\">\n\t\t\t<Value>" +
+                   std::to_string(ARV_PIXEL_FORMAT_MONO_12) + "</Value>\n\t\t</EnumEntry>\n\t\t");
   insertBefore(xml, "</RegisterDescription>", ptpFeatures());
   return xml;
 }
