@@ -25,17 +25,16 @@
 namespace multislit::apps {
 namespace {
 
-// --serial, --fps and --loss; a value out of range is a usage error.
+// --serial, --fps, --loss, --ptp and --clock-offset; a value out of range is a usage error.
 EmulatorConfig emulatorConfigFromArgs(const cli::ArgParser& args) {
   EmulatorConfig config;
   config.serial = args.str("serial");
   config.fps = args.number("fps");
   config.lost_packet_ratio = args.number("loss");
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw cli::UsageError(optionMessage(e.what(), args, {{"lost_packet_ratio", "loss"}}));
-  }
+  config.ptp = args.has("ptp");
+  config.clock_offset_s = args.number("clock-offset");
+  validateOptions(config, args,
+                  {{"lost_packet_ratio", "loss"}, {"clock_offset_s", "clock-offset"}});
   return config;
 }
 
@@ -172,7 +171,14 @@ void addOptions(cli::ArgParser& args) {
   args.option("serial", emulator.serial, "device serial number");
   args.option("loss", defaultText(emulator.lost_packet_ratio),
               "fraction of stream packets not sent, to test lossy links");
-  args.option("bit-depth", defaultText(render.bit_depth), "8 (Mono8) or 16 (Mono16)");
+  args.option("bit-depth", defaultText(render.bit_depth),
+              "the images' bits, 8 or 16; a client may ask Mono8, Mono12 or Mono16 of them");
+  args.flag("ptp",
+            "announce a clock synchronized by PTP (PtpEnable on, PtpStatus Slave): clients stamp "
+            "frames with the camera's clock");
+  args.option("clock-offset", defaultText(emulator.clock_offset_s),
+              "the camera clock's lead over the host's UTC clock [s]; with --ptp, 37 makes a PTP "
+              "clock on TAI");
   args.option("seed", std::to_string(render.seed), "noise seed");
   args.option("sensor", "",
               std::string("sensor YAML (default: the paper's sensor)") + kRenderMemory);
@@ -240,7 +246,10 @@ int runEmulate(int argc, char** argv) {
   const StopSignal stop;  // Ctrl-C and SIGTERM end the serving
   std::cout << "GigE Vision camera " << CameraEmulator::kAddress << " (serial " << config.serial
             << "): " << sensor.camera.width << "x" << sensor.camera.height << " Mono"
-            << render.bit_depth << ", " << what << " at " << config.fps << " Hz; ";
+            << render.bit_depth << ", " << what << " at " << config.fps << " Hz"
+            << (config.ptp ? ", PTP clock" : "");
+  if (config.clock_offset_s != 0) std::cout << " " << config.clock_offset_s << " s ahead of UTC";
+  std::cout << "; ";
   if (seconds > 0)
     std::cout << "for " << seconds << " s\n" << std::flush;
   else

@@ -1,6 +1,7 @@
 // multislit map: the whole chain on frames of a camera, a recording or the simulator, with the
 // robot's poses from odometry, a robot standing still or the built-in gait model. Every frame:
 // image -> RDMap -> floor -> obstacle groups -> OctoMap -> footsteps -> walk / turn / stop.
+#include "camera_options.h"
 #include "cli.h"
 #include "commands.h"
 #include "config_options.h"
@@ -42,6 +43,7 @@ void declareMapOptions(cli::ArgParser& args) {
               "odometry samples farther apart are not interpolated [s]");
   args.option("frames", "0", "stop after this many frames (0: all, or until Ctrl-C)");
   args.option("fps", defaultText(MapInputOptions{}.fps), "camera frame rate [Hz]");
+  addCameraOptions(args);
   args.option("out", "out/map", "output folder");
   args.flag("strict",
             "a frame file of a recording that cannot be read is an error (default: "
@@ -57,6 +59,8 @@ MapInputOptions inputOptions(const cli::ArgParser& args) {
   o.sensor = args.str("sensor");
   o.fps = args.number("fps", 0.1, 1000);
   o.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
+  if (o.camera.empty()) refuseCameraOptionsWithoutCamera(args);
+  o.camera_settings = cameraSettingsFromArgs(args);
   return o;
 }
 
@@ -176,7 +180,7 @@ int runMap(int argc, char** argv) {
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string stamps = args.has("camera")
-                                 ? std::string(stampSourceName(counts.clock)) + " clock"
+                                 ? timeBaseText(counts.clock, args.number("ptp-utc-offset"))
                                  : std::string("recorded");
   const std::string heading =
       "multislit map: " + in.description + " (stamps: " + stamps + "), poses from " +

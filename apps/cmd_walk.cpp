@@ -348,13 +348,13 @@ int runWalk(int argc, char** argv) {
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
-    recording.emplace(args.str("record"), walk.reference(), config.pipeline.sensor,
+    recording.emplace(args.str("record"), &walk.reference(), config.pipeline.sensor,
                       std::vector<std::string>{args.str("sensor"), args.str("photometry")});
   }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
   for (long k = 0; k < frames && !StopSignal::requested(); ++k) {
     const WalkFrame f = walk.step();
-    if (recording) recording->add(f.image, f.stamp_us, f.world_from_torso);
+    if (recording) recording->add(f.image, f.stamp_us, "simulated", f.world_from_torso);
     record(r, f, walk);
     if (passes) writeSweepPasses(passes->stream(), f, walk.map(), histograms);
     trackBall(r, f, walk);

@@ -15,5 +15,6 @@ int runDetect(int argc, char** argv);
 int runTable1(int argc, char** argv);
 int runBench(int argc, char** argv);
 int runMap(int argc, char** argv);
+int runRecord(int argc, char** argv);
 
 }  // namespace multislit::apps

@@ -4,6 +4,7 @@
 //   multislit_grabber_example --simulate ball --seconds 10
 //   multislit emulate &   multislit_grabber_example --camera 127.0.0.1 --calibration calib.yaml
 //   multislit_grabber_example --sequence out/simulate --calibration calib.yaml --save clouds
+#include "camera_options.h"
 #include "cli.h"
 #include "output_file.h"
 
@@ -36,6 +37,7 @@ struct Options {
   std::string camera, sequence, scenario, calibration, save_dir;
   double fps = 0.0, seconds = 10.0;
   long frames = 0, packet_size = 0;
+  multislit::AravisConfig camera_settings;  // exposure, gain, pixel format, PTP offset
 };
 
 void declareOptions(ArgParser& args) {
@@ -47,6 +49,7 @@ void declareOptions(ArgParser& args) {
               "reference of multislit calibrate (built for --simulate); its camera_id is checked");
   args.option("fps", "0", "camera / replay / simulator rate [Hz]; 0: camera 30, else max");
   args.option("packet-size", "0", "GigE Vision packet size [B]; 0: the camera's");
+  multislit::apps::addCameraOptions(args);
   args.option("seconds", "10", "run this long [s]");
   args.option("frames", "0", "stop after this many clouds; 0: no limit");
   args.option("save", "", "folder to write every cloud to as binary PCD");
@@ -67,6 +70,8 @@ std::optional<Options> parseOptions(ArgParser& args, int argc, char** argv) {
   o.frames = args.integer("frames", 0, INT_MAX);
   if (!o.camera.empty() + !o.sequence.empty() + !o.scenario.empty() != 1)
     throw UsageError("give one of --camera, --sequence and --simulate");
+  if (o.camera.empty()) multislit::apps::refuseCameraOptionsWithoutCamera(args);
+  o.camera_settings = multislit::apps::cameraSettingsFromArgs(args);
   if (o.scenario.empty() && o.calibration.empty())
     throw UsageError("--calibration FILE is needed with --camera and --sequence");
   return o;
@@ -83,7 +88,7 @@ Input openInput(const Options& o) {
   Input in;
   if (!o.calibration.empty()) in.reference = multislit::Reference::load(o.calibration);
   if (!o.camera.empty()) {
-    multislit::AravisConfig config;
+    multislit::AravisConfig config = o.camera_settings;
     config.camera = o.camera;
     config.frame_rate = o.fps > 0 ? o.fps : 30.0;
     config.roi_width = in.reference.image_width;

@@ -26,7 +26,7 @@ MapInput openMapInput(const MapInputOptions& o, const SimulatedInputOpener& simu
   if (o.calibration.empty())
     throw cli::UsageError(p + "calibration FILE is needed (the reference of multislit calibrate)");
   if (!o.camera.empty()) {
-    AravisConfig config;
+    AravisConfig config = o.camera_settings;
     config.camera = o.camera;
     config.frame_rate = o.fps;
     config.roi_width = in.reference.image_width;

@@ -34,6 +34,9 @@ struct MapInputOptions {
   /// Recorded and simulated frames come at `fps`, as from a camera; false: as fast as taken.
   bool paced = false;
   std::string prefix = "--";  ///< how messages name the options
+  /// What the camera is set to (exposure, gain, pixel format, PTP offset); its address, rate,
+  /// region and identity come from the fields above and the calibration.
+  AravisConfig camera_settings;
 };
 
 /// The frames' source, the reference that goes with them, and the sensor on the robot.

@@ -20,6 +20,8 @@ const Command kCommands[] = {
     {"map",
      "the whole chain on a camera, a recording or the simulator, with odometry: map, decisions",
      multislit::apps::runMap},
+    {"record", "save what a live camera sends (frames, stamps, sensor) for map --sequence",
+     multislit::apps::runRecord},
     {"simulate", "render reference and sequence images of a simulated scene, with ground truth",
      multislit::apps::runSimulate},
     {"emulate", "serve the simulator's images of a walk as a GigE Vision camera on 127.0.0.1",

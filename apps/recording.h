@@ -1,5 +1,7 @@
-// A recording that `multislit map --sequence` replays: PNG frames, frames.csv (file, stamp_us),
-// odometry.csv (the robot's pose at each stamp, see odometry.h), calibration.yaml and sensor.yaml.
+// A recording that `multislit map --sequence` replays: PNG frames, frames.csv (file, stamp_us and
+// the clock of each stamp), odometry.csv (the robot's pose at each stamp, see odometry.h) when
+// poses are given, calibration.yaml when there is one, and sensor.yaml. Written by `walk --record`
+// (the simulator) and `multislit record` (a live camera).
 #pragma once
 
 #include "output_file.h"
@@ -20,20 +22,26 @@ namespace multislit::apps {
 
 class SequenceRecorder {
  public:
-  /// Writes calibration.yaml and sensor.yaml into `folder` (created), each whole or absent, and
-  /// begins frames.csv; throws std::runtime_error when one of them would overwrite one of
-  /// `inputs` (`walk --sensor rec/sensor.yaml --record rec`).
-  SequenceRecorder(const std::filesystem::path& folder, const Reference& reference,
+  /// Writes calibration.yaml (when `reference` is given) and sensor.yaml into `folder`
+  /// (created), each whole or absent, and begins frames.csv; throws std::runtime_error when one of
+  /// them would overwrite one of `inputs` (`walk --sensor rec/sensor.yaml --record rec`).
+  SequenceRecorder(const std::filesystem::path& folder, const Reference* reference,
                    const SensorConfig& sensor, const std::vector<std::string>& inputs);
-  /// One frame: frame_NNNNNN.png, its row of frames.csv and its pose.
-  void add(const cv::Mat& image, std::uint64_t stamp_us, const Eigen::Isometry3d& world_from_robot);
-  /// Completes frames.csv and writes odometry.csv; throws std::runtime_error on a write error
-  /// (then neither is left behind, cut).
+  /// One frame: frame_NNNNNN.png (written whole) and its row of frames.csv; `clock` names the
+  /// clock of its stamp ("camera", "host", "simulated").
+  void add(const cv::Mat& image, std::uint64_t stamp_us, const std::string& clock);
+  /// The same with the robot's pose at the frame, for odometry.csv.
+  void add(const cv::Mat& image, std::uint64_t stamp_us, const std::string& clock,
+           const Eigen::Isometry3d& world_from_robot);
+  std::size_t frames() const { return frames_; }
+  /// Completes frames.csv and, when poses were given, writes odometry.csv; throws
+  /// std::runtime_error on a write error (then neither is left behind, cut).
   void finish();
 
  private:
   std::filesystem::path folder_;
   std::unique_ptr<OutputFile> index_;  ///< frames.csv, renamed into place by finish()
+  std::size_t frames_ = 0;
   std::vector<OdometrySample> poses_;
 };
 

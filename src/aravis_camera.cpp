@@ -7,6 +7,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 #include <utility>
@@ -39,7 +41,73 @@ std::string localAddressFor(const std::string& device) {
 }
 
 ArvPixelFormat asked(PixelFormat format) {
-  return format == PixelFormat::Mono8 ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
+  switch (format) {
+    case PixelFormat::Mono8:
+      return ARV_PIXEL_FORMAT_MONO_8;
+    case PixelFormat::Mono12:
+      return ARV_PIXEL_FORMAT_MONO_12;
+    case PixelFormat::Mono16:
+      break;
+  }
+  return ARV_PIXEL_FORMAT_MONO_16;
+}
+
+// A number the camera is set to (exposure, gain): its GenICam feature, the config's field, the
+// unit and Aravis's calls for it.
+struct CameraSetting {
+  const char* feature;
+  const char* field;
+  const char* unit;
+  gboolean (*available)(ArvCamera*, GError**);
+  void (*bounds)(ArvCamera*, double*, double*, GError**);
+  void (*set)(ArvCamera*, double, GError**);
+  double (*get)(ArvCamera*, GError**);
+};
+
+const CameraSetting kExposure{"ExposureTime (or ExposureTimeAbs)",
+                              "exposure_us",
+                              "us",
+                              arv_camera_is_exposure_time_available,
+                              arv_camera_get_exposure_time_bounds,
+                              arv_camera_set_exposure_time,
+                              arv_camera_get_exposure_time};
+const CameraSetting kGain{"Gain (or GainRaw)",
+                          "gain_db",
+                          "dB",
+                          arv_camera_is_gain_available,
+                          arv_camera_get_gain_bounds,
+                          arv_camera_set_gain,
+                          arv_camera_get_gain};
+
+std::string shortNumber(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+// Sets `setting` to `value`; throws naming the feature and the field when the camera has no such
+// feature, `value` lies outside its range, or the camera took another value (more than 1 % or
+// one unit off: cameras round to their steps).
+void setNumber(ArvCamera* c, const CameraSetting& setting, double value) {
+  const std::string asked = std::string(" (AravisConfig.") + setting.field + " " +
+                            shortNumber(value) + " " + setting.unit + ")";
+  Error error;
+  if (!setting.available(c, error.out()) || error)
+    throw std::runtime_error(std::string("the camera has no ") + setting.feature + asked);
+  double min = 0, max = 0;
+  setting.bounds(c, &min, &max, error.out());
+  if (!error && max > min && (value < min || value > max))
+    throw std::runtime_error(std::string("the camera takes ") + setting.feature + " from " +
+                             shortNumber(min) + " to " + shortNumber(max) + " " + setting.unit +
+                             asked);
+  setting.set(c, value, error.out());
+  if (error)
+    throw std::runtime_error(std::string("the camera refused ") + setting.feature + asked + ": " +
+                             error.message());
+  const double taken = setting.get(c, error.out());
+  if (!error && std::abs(taken - value) > std::max(1.0, 0.01 * std::abs(value)))
+    throw std::runtime_error(std::string("the camera set ") + setting.feature + " to " +
+                             shortNumber(taken) + " " + setting.unit + " when asked" + asked);
 }
 
 std::string formatName(ArvPixelFormat format) {
@@ -194,14 +262,8 @@ FrameShape configureCamera(ArvCamera* c, const AravisConfig& config) {
   arv_camera_set_acquisition_mode(c, ARV_ACQUISITION_MODE_CONTINUOUS, error.out());
   error.check("AcquisitionMode");
   setFormatAndRegion(c, config);
-  if (config.exposure_us > 0) {
-    arv_camera_set_exposure_time(c, config.exposure_us, error.out());
-    error.check("ExposureTime");
-  }
-  if (config.gain_db >= 0) {
-    arv_camera_set_gain(c, config.gain_db, error.out());
-    error.check("Gain");
-  }
+  if (config.exposure_us > 0) setNumber(c, kExposure, config.exposure_us);
+  if (config.gain_db >= 0) setNumber(c, kGain, config.gain_db);
   if (config.trigger == TriggerMode::FreeRunning) {
     if (config.frame_rate > 0) {
       arv_camera_set_frame_rate(c, config.frame_rate, error.out());

@@ -4,6 +4,7 @@
 #include "multislit/sources.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace multislit {
@@ -55,15 +56,16 @@ BufferCheck checkBuffer(ArvBuffer* buffer, const aravis::FrameShape& asked) {
 }
 
 // A checked buffer's image as a Frame (its pixels copied).
-Frame copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival,
-                bool camera_clock) {
+Frame copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival, bool camera_clock,
+                std::int64_t camera_lead_ns) {
   const int width = arv_buffer_get_image_width(buffer);
   const int height = arv_buffer_get_image_height(buffer);
   const int type =
       arv_buffer_get_image_pixel_format(buffer) == ARV_PIXEL_FORMAT_MONO_8 ? CV_8UC1 : CV_16UC1;
   std::size_t size = 0;
   const void* data = arv_buffer_get_image_data(buffer, &size);
-  // The camera's clock when PTP gives it the epoch, else the host's at the buffer's arrival.
+  // The camera's clock when PTP gives it the epoch (less its lead over UTC), else the host's at
+  // the buffer's arrival.
   std::uint64_t host_ns = arv_buffer_get_system_timestamp(buffer);
   if (host_ns == 0)
     host_ns = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -72,7 +74,8 @@ Frame copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival
   Frame frame;
   frame.image = cv::Mat(height, width, type, const_cast<void*>(data)).clone();
   frame.camera_stamp_ns = arv_buffer_get_timestamp(buffer);
-  const FrameStamp stamp = chooseFrameStamp(camera_clock, frame.camera_stamp_ns, host_ns);
+  const FrameStamp stamp =
+      chooseFrameStamp(camera_clock, frame.camera_stamp_ns, host_ns, camera_lead_ns);
   frame.stamp_us = stamp.stamp_us;
   frame.stamp_source = stamp.source;
   frame.seq = arv_buffer_get_frame_id(buffer);
@@ -82,6 +85,24 @@ Frame copyFrame(ArvBuffer* buffer, std::chrono::steady_clock::time_point arrival
 
 }  // namespace
 
+const char* pixelFormatName(PixelFormat format) {
+  switch (format) {
+    case PixelFormat::Mono8:
+      return "Mono8";
+    case PixelFormat::Mono12:
+      return "Mono12";
+    case PixelFormat::Mono16:
+      break;
+  }
+  return "Mono16";
+}
+
+std::optional<PixelFormat> parsePixelFormat(const std::string& name) {
+  for (PixelFormat f : {PixelFormat::Mono8, PixelFormat::Mono12, PixelFormat::Mono16})
+    if (name == pixelFormatName(f)) return f;
+  return std::nullopt;
+}
+
 void AravisConfig::validate() const {
   auto fail = [](const std::string& field, const std::string& what) {
     throw std::invalid_argument("AravisConfig." + field + " " + what);
@@ -89,6 +110,8 @@ void AravisConfig::validate() const {
   if (camera.empty()) fail("camera", "must not be empty");
   if (!(exposure_us >= 0)) fail("exposure_us", "must be >= 0");
   if (!(frame_rate >= 0)) fail("frame_rate", "must be >= 0");
+  if (!(std::abs(ptp_utc_offset_s) <= 86400))
+    fail("ptp_utc_offset_s", "must be in [-86400, 86400]");
   if (roi_x < 0 || roi_y < 0) fail("roi_x", "and roi_y must be >= 0");
   if (roi_width < 0 || roi_height < 0) fail("roi_width", "and roi_height must be >= 0");
   if (buffer_count < 2) fail("buffer_count", "must be >= 2");
@@ -254,7 +277,9 @@ std::optional<Frame> AravisSource::take(Clock::time_point deadline) {
     trigger_outstanding_ = false;
     const BufferCheck check = checkBuffer(buffer, camera_->shape);
     std::optional<Frame> frame;
-    if (check.problem.empty()) frame = copyFrame(buffer, now, stamp_source_ == StampSource::Camera);
+    if (check.problem.empty())
+      frame = copyFrame(buffer, now, stamp_source_ == StampSource::Camera,
+                        std::llround(config_.ptp_utc_offset_s * 1e9));
     arv_stream_push_buffer(stream, buffer);
     if (!frame) {
       ++bad_buffers_;

@@ -1,6 +1,7 @@
 // FrameSource: the interruptible waits every source shares.
 #include "multislit/sources.h"
 
+#include <cstdio>
 #include <utility>
 
 namespace multislit {
@@ -10,9 +11,21 @@ const char* stampSourceName(StampSource source) {
 }
 
 FrameStamp chooseFrameStamp(bool camera_clock_synchronized, std::uint64_t camera_ns,
-                            std::uint64_t host_ns) {
-  if (camera_clock_synchronized && camera_ns > 0) return {camera_ns / 1000, StampSource::Camera};
+                            std::uint64_t host_ns, std::int64_t camera_lead_ns) {
+  if (camera_clock_synchronized && camera_ns > 0) {
+    const auto utc_ns = static_cast<std::int64_t>(camera_ns) - camera_lead_ns;
+    if (utc_ns > 0) return {static_cast<std::uint64_t>(utc_ns) / 1000, StampSource::Camera};
+  }
   return {host_ns / 1000, StampSource::Host};
+}
+
+std::string timeBaseText(StampSource source, double camera_lead_s) {
+  if (source == StampSource::Host) return "host clock";
+  if (camera_lead_s == 0) return "camera PTP clock, taken as UTC (no offset applied)";
+  char text[96];
+  std::snprintf(text, sizeof text, "camera PTP clock, %s offset %g s applied",
+                camera_lead_s == kTaiUtcOffsetS ? "TAI-UTC" : "UTC", camera_lead_s);
+  return text;
 }
 
 std::string FrameSource::lastError() const {

@@ -1,5 +1,5 @@
-# Sourced by the bash checks (cli_check, outputs_check, map_command, grabber_example): their
-# common steps.
+# Sourced by the bash checks (cli_check, outputs_check, map_command, grabber_example,
+# record_command): their common steps.
 
 # start_in DIR: DIR made afresh, empty, and the current folder.
 start_in() {
@@ -9,6 +9,15 @@ start_in() {
 fail() {
   echo "FAIL: $*"
   exit 1
+}
+
+# waitlog FILE PATTERN: waits (at most 60 s) until FILE has a line matching PATTERN.
+waitlog() {
+  for _ in $(seq 1 600); do
+    grep -q -- "$2" "$1" 2>/dev/null && return 0
+    sleep 0.1
+  done
+  fail "no '$2' in $1 after 60 s: $(tail -5 "$1")"
 }
 
 # refused_with RC EXPECTED COMMAND...: the command exits with RC (any non-zero when RC is "any")

@@ -22,14 +22,6 @@ expect() {
   [[ $got == "$rc" ]] || fail "rc $got, not $rc: $*: $(cat out.log err.log | tail -5)"
   grep -q -- "$message" out.log err.log || fail "no '$message' from $*: $(cat out.log err.log)"
 }
-# waitlog FILE PATTERN: waits (at most 60 s) until FILE has a line matching PATTERN.
-waitlog() {
-  for _ in $(seq 1 600); do
-    grep -q -- "$2" "$1" 2>/dev/null && return 0
-    sleep 0.1
-  done
-  fail "no '$2' in $1 after 60 s: $(tail -5 "$1")"
-}
 
 # 1. The command line.
 expect 0 "usage: multislit_grabber_example" "$E" --help

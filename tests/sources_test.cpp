@@ -273,17 +273,22 @@ void expectServedImages(int type) {
   EXPECT_EQ(source.stats().frames, 12u);
 }
 
-// A frame's stamp: the camera's clock only when PTP gives it the epoch, the host's otherwise.
+// A frame's stamp: the camera's clock, less its lead over UTC, only when PTP gives it the epoch;
+// the host's otherwise.
 TEST(FrameStamp, CameraClockWhenPtpSynchronizedHostOtherwise) {
   const std::uint64_t camera_ns = 1800000000123456789ull, host_ns = 1800000000200000000ull;
-  const FrameStamp ptp = chooseFrameStamp(true, camera_ns, host_ns);
+  const FrameStamp ptp = chooseFrameStamp(true, camera_ns, host_ns, 0);
   EXPECT_EQ(ptp.source, StampSource::Camera);
   EXPECT_EQ(ptp.stamp_us, 1800000000123456u);
-  const FrameStamp free_running = chooseFrameStamp(false, 5000000000ull, host_ns);
-  EXPECT_EQ(free_running.source, StampSource::Host);  // 5 s since the camera's power-up
-  EXPECT_EQ(free_running.stamp_us, 1800000000200000u);
-  EXPECT_EQ(chooseFrameStamp(true, 0, host_ns).source, StampSource::Host);  // no camera stamp
+  const FrameStamp tai = chooseFrameStamp(true, camera_ns, host_ns, 37000000000);
+  EXPECT_EQ(tai.stamp_us, 1799999963123456u);  // 37 s earlier: UTC
+  const FrameStamp free_running = chooseFrameStamp(false, 5000000000ull, host_ns, 37000000000);
+  EXPECT_EQ(free_running.source, StampSource::Host);    // 5 s since the camera's power-up
+  EXPECT_EQ(free_running.stamp_us, 1800000000200000u);  // the host's UTC: no offset
+  EXPECT_EQ(chooseFrameStamp(true, 0, host_ns, 0).source, StampSource::Host);  // no camera stamp
   EXPECT_STREQ(stampSourceName(StampSource::Camera), "camera (PTP)");
+  EXPECT_EQ(timeBaseText(StampSource::Camera, 37), "camera PTP clock, TAI-UTC offset 37 s applied");
+  EXPECT_EQ(timeBaseText(StampSource::Host, 37), "host clock");
 }
 
 TEST(AravisSource, DeliversTheServedImagesMono8) { expectServedImages(CV_8UC1); }

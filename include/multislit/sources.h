@@ -96,15 +96,23 @@ class FrameSource {
 
 // --- cameras ---------------------------------------------------------------------------------
 
-enum class PixelFormat { Mono8, Mono16 };
+/// Mono12 comes unpacked, as 16-bit images of values 0..4095: give its reference full_scale 4095.
+enum class PixelFormat { Mono8, Mono12, Mono16 };
+/// "Mono8", "Mono12" or "Mono16" (GenICam's PixelFormat entries).
+const char* pixelFormatName(PixelFormat format);
+/// The format of that name; nullopt for any other.
+std::optional<PixelFormat> parsePixelFormat(const std::string& name);
 enum class TriggerMode { FreeRunning, Software };
 
 struct AravisConfig {
   /// GigE Vision camera: its IPv4 address ("127.0.0.1" for `multislit emulate`). USB3 Vision:
   /// "usb3:VENDOR:MODEL:SERIAL". Cameras are opened directly, never by network discovery.
   std::string camera = "127.0.0.1";
-  double exposure_us = 0.0;  ///< exposure time [us]; 0: keep the camera's
-  double gain_db = -1.0;     ///< analog gain [dB]; negative: keep the camera's
+  /// Exposure time (GenICam ExposureTime, or ExposureTimeAbs) [us]; 0: keep the camera's.
+  double exposure_us = 0.0;
+  /// Gain (GenICam Gain [dB]; cameras with only GainRaw take it in their raw units) [dB];
+  /// negative: keep the camera's.
+  double gain_db = -1.0;
   double frame_rate = 30.0;  ///< acquisition rate in free-running mode [Hz]; 0: keep the camera's
   PixelFormat pixel_format = PixelFormat::Mono8;
   int roi_x = 0;       ///< region of interest: left column [px]
@@ -124,6 +132,11 @@ struct AravisConfig {
   /// Stamp frames with the camera's own clock when PTP synchronizes it (PtpEnable or
   /// GevIEEE1588 on, status Master or Slave); false, or no PTP: the host's arrival time.
   bool camera_clock = true;
+  /// How far the camera's PTP clock runs ahead of UTC, subtracted from every stamp taken from it
+  /// [s]. PTP's default time scale is TAI, 37 s ahead (ptp4l and GigE Vision cameras keep it
+  /// unless the grandmaster serves an arbitrary time scale); 0 for a camera whose PTP time is
+  /// UTC. Host stamps are UTC already and keep their value.
+  double ptp_utc_offset_s = kTaiUtcOffsetS;
   /// When not empty, the camera's serial number (DeviceSerialNumber) or DeviceID must equal this
   /// (a calibration's camera_id, `multislit calibrate --camera-id`): another camera at the
   /// address is refused, with an error naming both.
@@ -138,7 +151,8 @@ struct AravisConfig {
 /// format it does not take) is refused when opened, and frames of another size or format are
 /// skipped, each named with what was asked in lastError(). Frame
 /// seq is the camera's frame id (16-bit ids of GigE Vision 1.x unwrapped); stamp_us the camera's
-/// PTP-synchronized clock at exposure when it has one (AravisConfig::camera_clock), else the
+/// PTP-synchronized clock at exposure when it has one (AravisConfig::camera_clock), less
+/// AravisConfig::ptp_utc_offset_s, else the
 /// host's clock when the buffer arrived; Frame::stamp_source says which, camera_stamp_ns keeps
 /// the camera's own timestamp either way.
 class AravisSource : public FrameSource {

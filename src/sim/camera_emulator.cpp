@@ -1,6 +1,7 @@
 // CameraEmulator: Aravis's GigE Vision fake camera on 127.0.0.1, filled with our own images.
 #include "multislit/sim/camera_emulator.h"
 #include "aravis_util.h"
+#include "emulator_genicam.h"
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -58,6 +60,7 @@ void EmulatorConfig::validate() const {
   if (!(fps > 0 && fps <= 1000)) fail("fps", "must be in (0, 1000]");
   if (!(lost_packet_ratio >= 0 && lost_packet_ratio <= 1))
     fail("lost_packet_ratio", "must be in [0, 1]");
+  if (!(std::abs(clock_offset_s) <= 86400)) fail("clock_offset_s", "must be in [-86400, 86400]");
 }
 
 // Live images: made on a thread of their own, a few ahead of the camera, taken in turn.
@@ -154,6 +157,7 @@ struct CameraEmulator::Impl {
   std::vector<cv::Mat> images;                          // continuous, same size and type
   ArvPixelFormat own_format = ARV_PIXEL_FORMAT_MONO_8;  // the images'
   bool keep_format = false;
+  std::int64_t clock_offset_ns = 0;  // the camera clock's lead over the host's
   std::atomic<double> lost_ratio{0.0};
   std::atomic<std::uint64_t> served{0};
   // g_object_set() from the camera's thread refs the camera: never while it is being destroyed.
@@ -169,6 +173,10 @@ struct CameraEmulator::Impl {
   static void fill(ArvBuffer* buffer, void* user, guint32 /*exposure_us*/, guint32 /*gain*/,
                    ArvPixelFormat format) {
     auto* self = static_cast<Impl*>(user);
+    if (self->clock_offset_ns != 0)  // the fake camera stamps with the host's clock
+      arv_buffer_set_timestamp(
+          buffer, static_cast<guint64>(static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer)) +
+                                       self->clock_offset_ns));
     // The lost packet ratio of this frame, set here, on the camera's thread that sends it. A
     // camera keeping its format sends no frame of another one, and takes its own back.
     const bool foreign = self->keep_format && format != self->own_format;
@@ -183,7 +191,9 @@ struct CameraEmulator::Impl {
                                      ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, self->own_format);
       return;
     }
-    if (format != ARV_PIXEL_FORMAT_MONO_8 && format != ARV_PIXEL_FORMAT_MONO_16) return;
+    if (format != ARV_PIXEL_FORMAT_MONO_8 && format != ARV_PIXEL_FORMAT_MONO_12 &&
+        format != ARV_PIXEL_FORMAT_MONO_16)
+      return;
     gint x = 0, y = 0, width = 0, height = 0;
     arv_buffer_get_image_region(buffer, &x, &y, &width, &height);
     std::size_t reported = 0;
@@ -198,9 +208,10 @@ struct CameraEmulator::Impl {
     // The requested region of the image, converted to the requested depth.
     const cv::Rect region = cv::Rect(x, y, width, height) & cv::Rect(0, 0, image.cols, image.rows);
     if (region.area() > 0) {
-      const double scale = image.depth() == out_depth ? 1.0
-                           : image.depth() == CV_8U   ? 257.0
-                                                      : 1.0 / 257;
+      const double white = format == ARV_PIXEL_FORMAT_MONO_8    ? 255.0
+                           : format == ARV_PIXEL_FORMAT_MONO_12 ? 4095.0
+                                                                : 65535.0;
+      const double scale = white / (image.depth() == CV_8U ? 255.0 : 65535.0);
       image(region).convertTo(
           target(cv::Rect(region.x - x, region.y - y, region.width, region.height)), out_depth,
           scale);
@@ -244,10 +255,13 @@ void CameraEmulator::start(cv::Size size, int type, const EmulatorConfig& config
   impl_->own_format =
       CV_MAT_DEPTH(type) == CV_8U ? ARV_PIXEL_FORMAT_MONO_8 : ARV_PIXEL_FORMAT_MONO_16;
   impl_->keep_format = config.keep_pixel_format;
+  impl_->clock_offset_ns = std::llround(config.clock_offset_s * 1e9);
   if (!gvcpPortFree())
     throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
                              ":3956: the port is taken (another multislit emulate or camera?)");
-  impl_->camera.reset(arv_gv_fake_camera_new(kAddress, config.serial.c_str()));
+  const emulator::TemporaryFile genicam(emulator::emulatorGenicam(config.serial));
+  impl_->camera.reset(
+      arv_gv_fake_camera_new_full(kAddress, config.serial.c_str(), genicam.path().c_str()));
   if (!impl_->camera || !arv_gv_fake_camera_is_running(impl_->camera.get()))
     throw std::runtime_error(std::string("cannot serve a GigE Vision camera on ") + kAddress +
                              ":3956 (is another camera running there?)");
@@ -263,6 +277,9 @@ void CameraEmulator::start(cv::Size size, int type, const EmulatorConfig& config
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT, impl_->own_format);
   arv_fake_camera_write_register(fake, ARV_FAKE_CAMERA_REGISTER_ACQUISITION_FRAME_PERIOD_US,
                                  static_cast<guint32>(1e6 / config.fps));
+  arv_fake_camera_write_register(fake, emulator::kPtpEnableRegister, config.ptp ? 1 : 0);
+  arv_fake_camera_write_register(fake, emulator::kPtpStatusRegister,
+                                 config.ptp ? emulator::kPtpStatusSlave : 0);
   arv_fake_camera_set_fill_pattern(fake, &Impl::fill, impl_.get());
   setLostPacketRatio(config.lost_packet_ratio);
 }

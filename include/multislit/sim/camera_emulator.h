@@ -14,7 +14,8 @@ namespace multislit {
 
 /// Aravis's GigE Vision fake camera on 127.0.0.1 (GVCP port 3956) serving images in turn: the
 /// frame with camera frame id k carries image imageIndex(k). For tests, demos and
-/// `multislit emulate`; it answers on the loopback interface only.
+/// `multislit emulate`; it answers on the loopback interface only. Its PixelFormat takes Mono8,
+/// Mono12 (the images scaled to 0..4095 in 16 bits) and Mono16.
 struct EmulatorConfig {
   std::string serial = "MULTISLIT";  ///< device serial number (at most 15 characters)
   double fps = 30.0;                 ///< frame rate until a client sets its own [Hz]
@@ -24,6 +25,12 @@ struct EmulatorConfig {
   /// format (a frame made in another is not sent). Only a format no larger than the client's
   /// can come: Mono8 images to a client asking Mono16.
   bool keep_pixel_format = false;
+  /// Announce a clock that PTP synchronizes (PtpEnable on, PtpStatus Slave), as a camera a
+  /// grandmaster sets: clients take its frames' timestamps as time since the epoch.
+  bool ptp = false;
+  /// How far the camera's clock runs ahead of the host's (UTC) clock, added to every frame's
+  /// timestamp [s]: 37 is a PTP clock on TAI. In [-86400, 86400].
+  double clock_offset_s = 0.0;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
