@@ -67,7 +67,16 @@ MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold
     c.sum[j] = c.moment[j] = c.w0[j] = c.s1[j] = c.s2[j] = c.s3[j] = c.s4[j] = c.t0[j] = c.t1[j] =
         c.t2[j] = 0;
   }
+  // Rows where no column stands above its limit add nothing (zeros) to any sum: only the rows from
+  // the first to the last that does are summed, in the same order, so the sums are the same bits.
+  int begin = count, end = 0;
   for (int i = 0; i < count; ++i) {
+    bool above = false;
+    for (int j = 0; j < kLanes; ++j) above = above || c.v[i][j] > limit[j];
+    begin = above ? std::min(begin, i) : begin;
+    end = above ? i + 1 : end;
+  }
+  for (int i = begin; i < end; ++i) {
     const float d = static_cast<float>(i) - half, d2 = d * d;
     for (int j = 0; j < kLanes; ++j) {
       const float v = c.v[i][j];
@@ -109,8 +118,13 @@ bool across(const cv::Mat& image, int row, double start, double slope, const Acr
                           lo + count <= image.rows;
       cols.used[j] = inside ? 1.0f : 0.0f;
       first_row[j] = lo;
-      for (int i = 0; i < count; ++i)
-        cols.v[i][j] = inside ? static_cast<float>(image.ptr<T>(static_cast<int>(lo + i))[x]) : 0;
+      if (!inside) {
+        for (int i = 0; i < count; ++i) cols.v[i][j] = 0;
+        continue;
+      }
+      const T* pixel = image.ptr<T>(static_cast<int>(lo)) + x;
+      const std::size_t step = image.step1();
+      for (int i = 0; i < count; ++i) cols.v[i][j] = static_cast<float>(pixel[i * step]);
     }
     sumColumns(cols, count, static_cast<float>(p.fit_threshold));
     double weight = 0, sum = 0;
