@@ -1,5 +1,6 @@
 #include "bench_plain.h"
 
+#include "output_file.h"
 #include "paper_method.h"
 
 #include <opencv2/core.hpp>
@@ -78,7 +79,7 @@ PlainRun runPlain(const BenchInput& in, int passes) {
   const double half = 0.5 * in.reference.region_width;
   volatile std::uint64_t sink = 0;  // the sums are used: the reads are not optimized away
   // Each in passes of its own over the frames, so that each frame comes from memory as in ours.
-  for (int pass = -1; pass < passes; ++pass) {  // -1: warm-up
+  for (int pass = -1; pass < passes && !StopSignal::requested(); ++pass) {  // -1: warm-up
     for (std::size_t k = 0; k < n; ++k) {
       const cv::Mat& image = in.images[k];
       const double min_contrast = 0.06 * fullScale(in.reference, image);  // the paper's limit

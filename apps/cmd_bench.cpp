@@ -270,6 +270,7 @@ ScaleResult measure(const BenchInput& in, int passes, double tolerance) {
   r.ours = runOurs(in, passes);
   if (StopSignal::requested()) return r;
   r.plain = runPlain(in, passes);
+  if (StopSignal::requested()) return r;
   r.points = r.ours.valid_points;
   r.threshold = metricThreshold(in.reference, FloorDetectorConfig{}.threshold());
   r.stock = runStockPath(in, std::max(1, passes / 4), r.threshold.median);
