@@ -1,6 +1,7 @@
 // multislit bench: the time of every stage of the pipeline on one core, against the stock PCL
 // path on the same frames (issue 7), with the agreement of the two paths' detections.
 #include "bench_input.h"
+#include "bench_plain.h"
 #include "bench_render.h"
 #include "bench_run.h"
 #include "bench_soak.h"
@@ -179,6 +180,7 @@ struct ScaleResult {
   std::size_t frames = 0;
   double points = 0;  ///< valid points per frame
   PathRun ours, stock;
+  PlainRun plain;  ///< the paper's extraction and the pixels read once, on the same frames
   MetricThreshold threshold;
   Agreement agreement;
 };
@@ -189,10 +191,13 @@ struct Row {
   StageTimes ours, stock;
 };
 
-/// The stages, then their sums. Extraction is ours in both paths (PCL has no slit extractor).
+/// The stages, then their sums. Extraction is ours in both paths (PCL has no slit extractor);
+/// below it, its anchors: the paper's plain method and the regions' pixels read once.
 std::vector<Row> rowsOf(const ScaleResult& r) {
   const PathRun &a = r.ours, &b = r.stock;
   return {{"extraction (both)", a.extract, a.extract},
+          {"plain extraction", r.plain.plain, StageTimes()},
+          {"pixels read once", r.plain.read, StageTimes()},
           {"floor fit + classify", a.floor, b.floor},
           {"clusters", a.clusters, b.clusters},
           {"map update", a.map, b.map},
@@ -242,6 +247,11 @@ void printSummary(const ScaleResult& r) {
       r.scale, r.frames, r.points, whole.stage.c_str(), 1.0 / whole.ours.mean(),
       1.0 / whole.stock.mean());
   std::printf(
+      "  extraction: %.1fx the paper's plain method (maximum and centroid on the row), %.1fx "
+      "reading every assigned pixel once (medians)\n",
+      r.ours.extract.quantile(0.5) / r.plain.plain.quantile(0.5),
+      r.ours.extract.quantile(0.5) / r.plain.read.quantile(0.5));
+  std::printf(
       "  stock SAC threshold %.2f mm = 0.9 px at the median reference point (5%%..95%%: "
       "%.2f..%.2f mm)\n",
       1e3 * r.threshold.median, 1e3 * r.threshold.low, 1e3 * r.threshold.high);
@@ -258,6 +268,8 @@ ScaleResult measure(const BenchInput& in, int passes, double tolerance) {
   r.scale = in.scale;
   r.frames = in.images.size();
   r.ours = runOurs(in, passes);
+  if (StopSignal::requested()) return r;
+  r.plain = runPlain(in, passes);
   if (StopSignal::requested()) return r;
   r.points = r.ours.valid_points;
   r.threshold = metricThreshold(in.reference, FloorDetectorConfig{}.threshold());

@@ -28,6 +28,23 @@ octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
                             static_cast<octomap::key_type>(k >> 32));
 }
 
+void FrameEvidence::sortMarks() {
+  if (marks.empty()) return;
+  constexpr int kBytes = 8;
+  std::uint64_t differ = 0;  // the bits in which some mark differs from the first
+  for (const std::uint64_t m : marks) differ |= m ^ marks.front();
+  sort_buffer.resize(marks.size());
+  for (int byte = 0; byte < kBytes; ++byte) {  // least significant first: each pass is stable
+    const int shift = 8 * byte;
+    if (((differ >> shift) & 0xffu) == 0) continue;
+    std::size_t start[257] = {};
+    for (const std::uint64_t m : marks) ++start[((m >> shift) & 0xffu) + 1];
+    for (int d = 0; d < 256; ++d) start[d + 1] += start[d];
+    for (const std::uint64_t m : marks) sort_buffer[start[(m >> shift) & 0xffu]++] = m;
+    marks.swap(sort_buffer);
+  }
+}
+
 void FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
                                  const OccupancyMapConfig& config) {
   const std::size_t rows = cloud.height, width = cloud.width;

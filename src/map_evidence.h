@@ -25,7 +25,8 @@ struct FrameEvidence {
   enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kPending = 2, kWeak = 3, kHit = 4 };
   static constexpr int kKindBits = 3;
   std::vector<std::uint64_t> marks;
-  octomap::KeyRay ray;  ///< (allocates room for 100 000 keys: made once)
+  std::vector<std::uint64_t> sort_buffer;  ///< sortMarks()'s room, kept across frames
+  octomap::KeyRay ray;                     ///< (allocates room for 100 000 keys: made once)
   /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
   struct Slit {
     double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
@@ -47,6 +48,9 @@ struct FrameEvidence {
 
   void mark(const octomap::OcTreeKey& key, Kind kind);
   static octomap::OcTreeKey keyOf(std::uint64_t mark);
+  /// `marks` in ascending order (what std::sort gives), by a radix sort over the bytes in which
+  /// they differ: a frame's voxels lie near each other, so most bytes of their keys are the same.
+  void sortMarks();
 
   /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
   /// mean), and where each slit's measured points end (a profile cut by the slit's end is biased):

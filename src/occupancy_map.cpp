@@ -224,7 +224,7 @@ void OccupancyMap::addFreeRay(const Eigen::Vector3d& floor_point, const Eigen::V
 MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
   MapUpdateStats stats;
   stats.inserted = true;
-  std::sort(e.marks.begin(), e.marks.end());
+  e.sortMarks();
   for (std::size_t i = 0; i < e.marks.size();) {
     // The marks of one voxel: a hit wins, then enough weak points; a miss only without weak
     // points (an object split between voxels lifts a few points in each).

@@ -24,29 +24,57 @@ Window windowAt(std::size_t k, std::size_t half, std::size_t width) {
   return {k > half ? k - half : 0, std::min(width, k + half + 1)};
 }
 
+/// The candidates of one block of `stride` cells along a slit (its residuals without NaN), in
+/// ascending order (insertion sort: a block holds 4 to 16 cells).
+void sortedBlock(const float* cells, std::size_t first, std::size_t last, std::vector<float>& out) {
+  out.clear();
+  for (std::size_t j = first; j < last; ++j) {
+    const float x = cells[j];
+    if (std::isnan(x)) continue;
+    out.push_back(x);
+    std::size_t i = out.size() - 1;
+    for (; i > 0 && out[i - 1] > x; --i) out[i] = out[i - 1];
+    out[i] = x;
+  }
+}
+
+/// The median of the union of ascending `a` (with one value equal to `skip` left out, unless
+/// NaN) and ascending `b`: the value at position n / 2 of the union, for an even n the mean of it
+/// and the one before; what any exact selection of the window's median gives. `n`: its size.
+float mergedMedian(const std::vector<float>& a, float skip, const std::vector<float>& b,
+                   std::size_t n) {
+  bool skipped = std::isnan(skip);
+  std::size_t i = 0, j = 0;
+  float before = 0.0f, at = 0.0f;
+  for (std::size_t p = 0; p <= n / 2; ++p) {
+    if (!skipped && i < a.size() && a[i] == skip) skipped = true, ++i;
+    const bool from_a = j >= b.size() || (i < a.size() && a[i] <= b[j]);
+    before = at;
+    at = from_a ? a[i++] : b[j++];
+  }
+  return n % 2 == 0 ? 0.5f * (at + before) : at;
+}
+
 /// The noise of the window medians of 2 half + 1 cells: 1.4826 x the median |median| of the
 /// windows centred on every (half + 1)-th cell of a slit, when a candidate, that hold at least
 /// half + 1 candidates: windows overlapping by half, not all (neighbouring windows share nearly all
-/// their cells, and the nth_element of every one took 0.5 to 1 ms a frame). NaN with fewer than
-/// kMinMedians windows.
+/// their cells). NaN with fewer than kMinMedians windows. The window about cell m (half + 1) is
+/// block m of half + 1 cells and block m - 1 without its first cell: each block is sorted once and
+/// the window's median merged from two (a selection per window took most of the floor's time).
 double windowNoise(const std::vector<float>& r, std::size_t width, std::size_t half) {
   const std::size_t stride = half + 1;
-  std::vector<float> medians, window;
+  std::vector<float> medians, previous, block;
   for (std::size_t row = 0; row + width <= r.size(); row += width) {
     const float* cells = r.data() + row;
+    previous.clear();
     for (std::size_t k = 0; k < width; k += stride) {
-      if (std::isnan(cells[k])) continue;
-      const Window w = windowAt(k, half, width);
-      window.clear();
-      for (std::size_t j = w.first; j < w.last; ++j)
-        if (!std::isnan(cells[j])) window.push_back(cells[j]);
-      if (window.size() <= half) continue;
-      const std::size_t n = window.size();
-      const auto mid = window.begin() + static_cast<std::ptrdiff_t>(n / 2);
-      std::nth_element(window.begin(), mid, window.end());
-      float median = *mid;
-      if (n % 2 == 0) median = 0.5f * (median + *std::max_element(window.begin(), mid));
-      medians.push_back(std::abs(median));
+      sortedBlock(cells, k, std::min(width, k + stride), block);
+      // Block m - 1 lies in the window but for its first cell (half + 1 cells before k).
+      const float skip = k > 0 ? cells[k - stride] : std::nanf("");
+      const std::size_t n = previous.size() - (std::isnan(skip) ? 0 : 1) + block.size();
+      if (!std::isnan(cells[k]) && n > half)
+        medians.push_back(std::abs(mergedMedian(previous, skip, block, n)));
+      std::swap(previous, block);
     }
   }
   if (medians.size() < kMinMedians) return std::numeric_limits<double>::quiet_NaN();

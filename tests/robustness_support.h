@@ -194,7 +194,7 @@ inline void judgePaper(const Reference& ref, const cv::Mat& image,
                        const std::map<std::pair<int, int>, const SlitCrossing*>& truth,
                        Tally* tally) {
   auto cloud = pcl::make_shared<pcl::PointCloud<PointRDM>>();
-  for (const test::PaperPoint& p : test::paperExtract(ref, image, kMinContrast)) {
+  for (const paper::PaperPoint& p : paper::paperExtract(ref, image, kMinContrast)) {
     if (!std::isfinite(p.dk)) continue;
     tally->paper_on_truth += onTruth(truth, p.slit, p.row, p.u + p.dk);
     PointRDM q;

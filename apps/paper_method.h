@@ -4,7 +4,7 @@
 // region's minimum; its centre is the centroid of the pixels above half the maximum. The floor:
 // RANSAC with q = 35 (eq. 3), least squares on the inliers (eq. 2), 0.9 px (3 x 0.3 px), no
 // noise rule. It shares our reference (slits and regions), so the two differ only in how a frame
-// is measured and judged.
+// is measured and judged. Shared by the robustness tests and `multislit bench`, which times it.
 #pragma once
 
 #include "multislit/reference.h"
@@ -16,7 +16,7 @@
 #include <limits>
 #include <vector>
 
-namespace multislit::test {
+namespace multislit::paper {
 
 struct PaperPoint {
   int slit = 0, row = 0;
@@ -29,15 +29,21 @@ void paperMeasureRow(const T* row, int columns, double u, double half, double mi
   const int first = std::max(0, static_cast<int>(std::ceil(u - half)));
   const int last = std::min(columns - 1, static_cast<int>(std::floor(u + half)));
   if (first > last) return;
-  double top = row[first], low = row[first];
+  int top = row[first], low = row[first];
   for (int x = first; x <= last; ++x)
-    top = std::max<double>(top, row[x]), low = std::min<double>(low, row[x]);
+    top = std::max<int>(top, row[x]), low = std::min<int>(low, row[x]);
   if (top - low < min_contrast) return;
-  const double mid = 0.5 * (top + low);
-  double sum = 0, moment = 0;
-  for (int x = first; x <= last; ++x)
-    if (row[x] > mid) sum += row[x] - mid, moment += (row[x] - mid) * x;
-  if (sum > 0) p->dk = moment / sum - u;
+  // Each pixel above mid = (top + low) / 2 weighted by twice its excess, a whole number without a
+  // branch: the centroid is the same number as with the excess itself, and `bench` times the
+  // method as fast as it is written simply.
+  const int twice_mid = top + low;
+  std::int64_t sum = 0, moment = 0;
+  for (int x = first; x <= last; ++x) {
+    const int w = std::max(2 * static_cast<int>(row[x]) - twice_mid, 0);
+    sum += w;
+    moment += static_cast<std::int64_t>(w) * x;
+  }
+  if (sum > 0) p->dk = static_cast<double>(moment) / static_cast<double>(sum) - u;
 }
 
 /// Every reference point of `ref` measured in `image` the paper's way (NaN dk: not measured).
@@ -65,4 +71,4 @@ inline std::vector<PaperPoint> paperExtract(const Reference& ref, const cv::Mat&
   return out;
 }
 
-}  // namespace multislit::test
+}  // namespace multislit::paper
