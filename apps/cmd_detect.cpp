@@ -171,7 +171,7 @@ int runDetect(int argc, char** argv) {
 
   const std::vector<std::string>& frames = args.rest();
   std::vector<std::string> inputs = frames;
-  for (const char* option : {"calibration", "reference", "sensor"})
+  for (const char* option : {"calibration", "reference", "sensor", "intrinsics"})
     inputs.push_back(args.str(option));
   refuseOverwritingInputs(args.str("out"), inputs);
   OutputFile file(args.str("out"));  // whole or absent: a bad frame leaves no partial JSONL

@@ -71,6 +71,70 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   std::sort(tasks_.begin(), tasks_.end(), [](const Task& a, const Task& b) {
     return a.row != b.row ? a.row < b.row : a.first < b.first;
   });
+  if (reference_.lens.distorted()) prepareIdeal();
+}
+
+void Extractor::prepareIdeal() {
+  const Lens& lens = reference_.lens;
+  const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const ReferenceSlit& slit : reference_.slits) {
+    IdealSlit ideal;
+    for (std::size_t k = 0; k < slit.u.size(); ++k) {
+      const Eigen::Vector2d q =
+          std::isfinite(slit.u[k]) ? reference_.idealPoint(slit, k) : Eigen::Vector2d(nan, nan);
+      ideal.u.push_back(q.x());
+      ideal.v.push_back(q.y());
+      ideal.u_inf.push_back(k < slit.u_inf.size() ? slit.u_inf[k] : nan);
+    }
+    ideal_slits_.push_back(std::move(ideal));
+  }
+  for (Task& t : tasks_) {
+    const IdealSlit& slit = ideal_slits_[t.cell / width];
+    const std::size_t k = t.cell % width;
+    IdealTask it;
+    it.ideal = Eigen::Vector2d(slit.u[k], slit.v[k]);
+    Eigen::Matrix2d jacobian;
+    lens.distort(it.ideal, &jacobian);
+    it.inverse_jacobian = jacobian.inverse();
+    t.lens = static_cast<std::uint32_t>(ideal_tasks_.size());
+    ideal_tasks_.push_back(it);
+    PointRDM& p = blank_[t.cell];  // the cell's reference point in the ideal image
+    p.u = static_cast<float>(it.ideal.x());
+    p.v = static_cast<float>(it.ideal.y());
+  }
+}
+
+bool Extractor::finishIdeal(const Task& t, double centre, PointRDM* p) const {
+  const IdealTask& it = ideal_tasks_[t.lens];
+  const Eigen::Vector2d q = reference_.lens.undistortNear(
+      Eigen::Vector2d(centre, t.row), it.ideal, Eigen::Vector2d(t.u, t.row), it.inverse_jacobian);
+  // The reference slit's segment that holds ideal row q.y(), from the task's own row on (the
+  // ideal rows rise along a slit); beyond an end, its last segment, at most two rows out.
+  const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
+  const IdealSlit& slit = ideal_slits_[t.cell / width];
+  const std::size_t n = slit.v.size();
+  if (n < 2 || !std::isfinite(q.y())) return false;
+  std::size_t k = t.cell % width;
+  while (k > 0 && slit.v[k] > q.y()) --k;
+  while (k + 2 < n && slit.v[k + 1] <= q.y()) ++k;
+  const std::size_t a = std::min(k, n - 2), b = a + 1;
+  const double w = (q.y() - slit.v[a]) / (slit.v[b] - slit.v[a]);
+  if (!(w > -2 && w < 3)) return false;  // NaN too: a gap in the slit
+  const double u = slit.u[a] + w * (slit.u[b] - slit.u[a]);
+  p->u = static_cast<float>(u);
+  p->v = static_cast<float>(q.y());
+  p->dk = static_cast<float>(q.x() - u);
+  const double u_inf = slit.u_inf[a] + w * (slit.u_inf[b] - slit.u_inf[a]);
+  if (!std::isfinite(u_inf) || !reference_.scale.valid()) return true;
+  const MetricScale& scale = reference_.scale;
+  const double depth = scale.disparity_constant / (q.x() - u_inf);
+  if (!(depth > 0)) return true;
+  const double depth_per_px = depth / scale.f;
+  p->x = static_cast<float>((q.x() - scale.cx) * depth_per_px);
+  p->y = static_cast<float>((q.y() - scale.cy) * depth_per_px);
+  p->z = static_cast<float>(depth);
+  return true;
 }
 
 bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
@@ -85,6 +149,7 @@ bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
   }
   // The image spans columns -0.5 to cols - 0.5 (pixel centres at whole numbers).
   if (!(centre > -0.5 && centre < image.cols - 0.5)) return false;
+  if (!ideal_tasks_.empty()) return finishIdeal(t, centre, p);
   p->dk = static_cast<float>(centre - t.u);
   if (!std::isfinite(t.u_inf)) return true;
   const MetricScale& scale = reference_.scale;

@@ -57,6 +57,11 @@ class Extractor {
   /// The RDMap of `image`: one cloud row per slit, one column per reference row of that slit
   /// (column j of slit i is image row first_row_i + j); NaN where nothing valid was measured.
   /// x, y, z in metres in the camera frame when the reference has a metric scale (else NaN).
+  /// Through a distorting lens (Reference::lens) the centre found on recorded row first_row_i + j
+  /// is undistorted to (u', v') of the ideal image, where the slit's epipolar lines are rows
+  /// again: the point's u and v are the reference slit's ideal point on ideal row v' (v' is not
+  /// a whole number; interpolated along the slit) and dk = u' - u, so that a plane stays a plane
+  /// in (u, v, dk) (eq. 1-3). The cell stays the recorded row's: column j of slit i.
   /// Throws std::invalid_argument when the image does not fit the reference.
   ExtractionStats extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const;
   /// Same, with the PCL header set: stamp in microseconds since the epoch, seq, frame_id.
@@ -73,6 +78,16 @@ class Extractor {
     float u = 0;              ///< reference column [px]
     float u_inf = 0;          ///< column of the ray at infinite depth [px]; NaN: no metric scale
     float slope = 0;          ///< the reference slit's du/dv here [-]
+    std::uint32_t lens = 0;   ///< index into ideal_tasks_ (distorting lens only)
+  };
+  /// A task's reference point in the ideal image and the inverse of the lens's Jacobian there.
+  struct IdealTask {
+    Eigen::Vector2d ideal;
+    Eigen::Matrix2d inverse_jacobian;
+  };
+  /// A reference slit's ideal points by recorded row: u, v and u_inf (NaN: none).
+  struct IdealSlit {
+    std::vector<double> u, v, u_inf;
   };
 
   /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
@@ -80,6 +95,12 @@ class Extractor {
   /// left unmeasured, when the centre lies beyond the image's edge (a fit pulled past it).
   bool finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
               PointRDM* p) const;
+  /// finish()'s last step through a distorting lens: the centre on task t's recorded row to
+  /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
+  /// the reference slit's ends.
+  bool finishIdeal(const Task& t, double centre, PointRDM* p) const;
+  /// The slits' ideal points and the lens's inverse Jacobian at each task's reference point.
+  void prepareIdeal();
   template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
@@ -87,6 +108,8 @@ class Extractor {
   Reference reference_;
   ExtractorConfig config_;
   std::vector<Task> tasks_;  ///< by image row, then column: the image is read top to bottom once
+  std::vector<IdealTask> ideal_tasks_;           ///< distorting lens only
+  std::vector<IdealSlit> ideal_slits_;           ///< distorting lens only
   pcl::PointCloud<PointRDM>::VectorType blank_;  ///< the cloud before anything is measured
 };
 
