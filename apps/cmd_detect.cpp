@@ -93,7 +93,8 @@ void writeJsonLine(std::ostream& out, const std::string& frame,
   out << ", \"obstacle_points\": [";
   for (std::size_t i = 0; i < listed.size(); ++i) {
     const PointRDM& p = cloud[static_cast<std::size_t>(listed[i])];
-    std::snprintf(buf, sizeof buf, "%s[%.3f, %.0f, %.4f]", i ? ", " : "", p.u, p.v, p.dk);
+    // v: a whole row, or an ideal row through a distorting lens (%g prints a whole one bare).
+    std::snprintf(buf, sizeof buf, "%s[%.3f, %.6g, %.4f]", i ? ", " : "", p.u, p.v, p.dk);
     out << buf;
   }
   out << "]}\n";

@@ -74,58 +74,78 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   if (reference_.lens.distorted()) prepareIdeal();
 }
 
+namespace {
+
+/// Farthest a centre's ideal row may lie from its reference point's [px]: the lens moves two
+/// points of one recorded row, a region apart, by less than a row of each other unless it bends
+/// lines by tens of pixels; beyond, the linear reference slit is not trusted.
+constexpr double kMaxIdealRowShift = 3.0;
+
+// The cubic of IdealTask for a task on `row` around reference column u, through `lens`: exact at
+// four columns spread over u +- reach.
+Eigen::Matrix<double, 2, 4> idealCubic(const Lens& lens, double u, int row, double reach) {
+  const double nodes[4] = {-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0};
+  Eigen::Matrix4d vandermonde;
+  Eigen::Matrix<double, 4, 2> values;
+  for (int j = 0; j < 4; ++j) {
+    for (int k = 0; k < 4; ++k) vandermonde(j, k) = std::pow(nodes[j], k);
+    values.row(j) = lens.undistort(Eigen::Vector2d(u + reach * nodes[j], row)).transpose();
+  }
+  return vandermonde.fullPivLu().solve(values).transpose();
+}
+
+}  // namespace
+
 void Extractor::prepareIdeal() {
   const Lens& lens = reference_.lens;
   const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  // A centre lies in its task's region, or up to a profile's half window beyond it.
+  const double reach = 0.5 * reference_.region_width + profileParams(CV_16U).half_window + 1.0;
+  std::vector<std::vector<Eigen::Vector3d>> ideal;  // per slit and row: ideal u, v and u_inf
   for (const ReferenceSlit& slit : reference_.slits) {
-    IdealSlit ideal;
+    ideal.emplace_back();
     for (std::size_t k = 0; k < slit.u.size(); ++k) {
       const Eigen::Vector2d q =
           std::isfinite(slit.u[k]) ? reference_.idealPoint(slit, k) : Eigen::Vector2d(nan, nan);
-      ideal.u.push_back(q.x());
-      ideal.v.push_back(q.y());
-      ideal.u_inf.push_back(k < slit.u_inf.size() ? slit.u_inf[k] : nan);
+      ideal.back().emplace_back(q.x(), q.y(), k < slit.u_inf.size() ? slit.u_inf[k] : nan);
     }
-    ideal_slits_.push_back(std::move(ideal));
   }
   for (Task& t : tasks_) {
-    const IdealSlit& slit = ideal_slits_[t.cell / width];
+    const std::vector<Eigen::Vector3d>& slit = ideal[t.cell / width];
     const std::size_t k = t.cell % width;
+    // The slit's slope by the rows next to this one that have a point.
+    const std::size_t a = k > 0 && std::isfinite(slit[k - 1].x()) ? k - 1 : k;
+    const std::size_t b = k + 1 < slit.size() && std::isfinite(slit[k + 1].x()) ? k + 1 : k;
+    const Eigen::Vector3d slope =
+        b > a ? Eigen::Vector3d((slit[b] - slit[a]) / (slit[b].y() - slit[a].y()))
+              : Eigen::Vector3d::Zero();
     IdealTask it;
-    it.ideal = Eigen::Vector2d(slit.u[k], slit.v[k]);
-    Eigen::Matrix2d jacobian;
-    lens.distort(it.ideal, &jacobian);
-    it.inverse_jacobian = jacobian.inverse();
+    it.cubic = idealCubic(lens, t.u, t.row, reach);
+    it.inverse_reach = 1.0 / reach;
+    it.u = slit[k].x(), it.v = slit[k].y(), it.u_inf = slit[k].z();
+    it.du_dv = slope.x(), it.du_inf_dv = std::isfinite(slope.z()) ? slope.z() : 0.0;
     t.lens = static_cast<std::uint32_t>(ideal_tasks_.size());
     ideal_tasks_.push_back(it);
     PointRDM& p = blank_[t.cell];  // the cell's reference point in the ideal image
-    p.u = static_cast<float>(it.ideal.x());
-    p.v = static_cast<float>(it.ideal.y());
+    p.u = static_cast<float>(it.u);
+    p.v = static_cast<float>(it.v);
   }
 }
 
 bool Extractor::finishIdeal(const Task& t, double centre, PointRDM* p) const {
   const IdealTask& it = ideal_tasks_[t.lens];
-  const Eigen::Vector2d q = reference_.lens.undistortNear(
-      Eigen::Vector2d(centre, t.row), it.ideal, Eigen::Vector2d(t.u, t.row), it.inverse_jacobian);
-  // The reference slit's segment that holds ideal row q.y(), from the task's own row on (the
-  // ideal rows rise along a slit); beyond an end, its last segment, at most two rows out.
-  const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
-  const IdealSlit& slit = ideal_slits_[t.cell / width];
-  const std::size_t n = slit.v.size();
-  if (n < 2 || !std::isfinite(q.y())) return false;
-  std::size_t k = t.cell % width;
-  while (k > 0 && slit.v[k] > q.y()) --k;
-  while (k + 2 < n && slit.v[k + 1] <= q.y()) ++k;
-  const std::size_t a = std::min(k, n - 2), b = a + 1;
-  const double w = (q.y() - slit.v[a]) / (slit.v[b] - slit.v[a]);
-  if (!(w > -2 && w < 3)) return false;  // NaN too: a gap in the slit
-  const double u = slit.u[a] + w * (slit.u[b] - slit.u[a]);
+  const double s = (centre - t.u) * it.inverse_reach;
+  const Eigen::Vector2d q =
+      it.cubic.col(0) + s * (it.cubic.col(1) + s * (it.cubic.col(2) + s * it.cubic.col(3)));
+  // The reference slit at the centre's ideal row.
+  const double dv = q.y() - it.v;
+  if (!(std::abs(dv) <= kMaxIdealRowShift)) return false;
+  const double u = it.u + dv * it.du_dv;
   p->u = static_cast<float>(u);
   p->v = static_cast<float>(q.y());
   p->dk = static_cast<float>(q.x() - u);
-  const double u_inf = slit.u_inf[a] + w * (slit.u_inf[b] - slit.u_inf[a]);
+  const double u_inf = it.u_inf + dv * it.du_inf_dv;
   if (!std::isfinite(u_inf) || !reference_.scale.valid()) return true;
   const MetricScale& scale = reference_.scale;
   const double depth = scale.disparity_constant / (q.x() - u_inf);

@@ -40,14 +40,15 @@ LensDistortion LensDistortion::fromOpenCV(const std::vector<double>& c) {
 }
 
 Lens::Lens(double f, double cx, double cy, const LensDistortion& distortion)
-    : f_(f), cx_(cx), cy_(cy), d_(distortion) {}
+    : f_(f), cx_(cx), cy_(cy), inverse_f_(1.0 / f), d_(distortion), rational_(d_.rational()) {}
 
 Eigen::Vector2d Lens::distort(const Eigen::Vector2d& ideal, Eigen::Matrix2d* jacobian) const {
-  const double x = (ideal.x() - cx_) / f_, y = (ideal.y() - cy_) / f_;
+  // Many calls (the renderer's every pixel): no division but the rational model's.
+  const double x = (ideal.x() - cx_) * inverse_f_, y = (ideal.y() - cy_) * inverse_f_;
   const double r2 = x * x + y * y;
   const double num = 1 + r2 * (d_.k1 + r2 * (d_.k2 + r2 * d_.k3));
-  const double den = 1 + r2 * (d_.k4 + r2 * (d_.k5 + r2 * d_.k6));
-  const double radial = num / den;
+  const double den = rational_ ? 1 + r2 * (d_.k4 + r2 * (d_.k5 + r2 * d_.k6)) : 1.0;
+  const double radial = rational_ ? num / den : num;
   const double xd = x * radial + 2 * d_.p1 * x * y + d_.p2 * (r2 + 2 * x * x);
   const double yd = y * radial + d_.p1 * (r2 + 2 * y * y) + 2 * d_.p2 * x * y;
   if (jacobian) {
@@ -76,21 +77,6 @@ Eigen::Vector2d Lens::undistort(const Eigen::Vector2d& recorded) const {
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   return {nan, nan};
-}
-
-Eigen::Vector2d Lens::undistortNear(const Eigen::Vector2d& recorded, const Eigen::Vector2d& ideal,
-                                    const Eigen::Vector2d& recorded_near,
-                                    const Eigen::Matrix2d& inverse_jacobian) const {
-  // Newton's method with the known pair's Jacobian; its first step needs no distort() call. Each
-  // step shrinks the error by the Jacobian's change over the distance, a few per cent over tens
-  // of pixels.
-  Eigen::Vector2d point = ideal - inverse_jacobian * (recorded_near - recorded);
-  for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector2d error = distort(point) - recorded;
-    if (error.squaredNorm() < 1e-6) return point;
-    point -= inverse_jacobian * error;
-  }
-  return undistort(recorded);  // too far from the pair
 }
 
 double Lens::largestShift(int width, int height) const {

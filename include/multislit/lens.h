@@ -60,12 +60,6 @@ class Lens {
   /// The ideal pixel of a recorded one (Newton's method to 1e-9 px); NaN where none is found
   /// (beyond where the model folds).
   Eigen::Vector2d undistort(const Eigen::Vector2d& recorded) const;
-  /// undistort() to 1e-3 px near a known pair: `ideal` whose recorded pixel is `recorded_near`,
-  /// with the inverse of distort()'s Jacobian there. One or two distort() calls when the point
-  /// lies within tens of pixels (the extractor: a frame's centre near its reference point).
-  Eigen::Vector2d undistortNear(const Eigen::Vector2d& recorded, const Eigen::Vector2d& ideal,
-                                const Eigen::Vector2d& recorded_near,
-                                const Eigen::Matrix2d& inverse_jacobian) const;
   /// Largest distance between a pixel of a w x h image and its ideal position [px] (at a corner
   /// or an edge's middle): how strongly the lens bends.
   double largestShift(int width, int height) const;
@@ -75,8 +69,9 @@ class Lens {
   bool monotonicOver(int width, int height) const;
 
  private:
-  double f_ = 1, cx_ = 0, cy_ = 0;
+  double f_ = 1, cx_ = 0, cy_ = 0, inverse_f_ = 1;
   LensDistortion d_;
+  bool rational_ = false;  // d_.rational(): the radial factor has a denominator
 };
 
 }  // namespace multislit
