@@ -107,8 +107,7 @@ BenchInput readBenchInput(const cli::ArgParser& args) {
       files.push_back(entry.path().string());
   std::sort(files.begin(), files.end());
   if (files.empty()) throw std::runtime_error("no PNG frames in '" + dir.string() + "'");
-  const SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  const SensorConfig sensor = sensorFromArgs(args);
   const SensorGeometry geometry(sensor);
   in.robot_from_camera = geometry.robotFromCamera(sensor.mount);
   in.light_origin = geometry.projectorCentre();

@@ -6,6 +6,7 @@
 #include "output_file.h"
 
 #include "multislit/reference.h"
+#include "multislit/slit_bend.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -75,7 +76,21 @@ std::vector<std::string> inputsOf(const cli::ArgParser& args) {
   for (const std::string& plane : args.list("plane"))
     inputs.push_back(plane.substr(plane.find(':') + 1));
   inputs.push_back(args.str("sensor"));
+  inputs.push_back(args.str("intrinsics"));
   return inputs;
+}
+
+// A warning on stderr when the reference's slits bend more than the projector model lets them:
+// the camera's lens distortion is likely missing (or the sensor file describes another sensor).
+void warnOfSlitBend(const Reference& ref, const SensorConfig& sensor) {
+  const double bend = slitBend(ref, sensor, sensor.mount);
+  if (bend <= kMaxSlitBend) return;
+  std::fprintf(stderr,
+               "warning: the reference's slits bend up to %.1f px away from the shape the "
+               "projector model gives them (at most %.1f px): is the lens distortion missing? "
+               "Give the camera's calibration with --intrinsics (OpenCV or ROS camera_info "
+               "YAML), or check the sensor file's projector and mount\n",
+               bend, kMaxSlitBend);
 }
 
 // Whole or absent: written beside `path`, read back (a full disk cuts it), then renamed.
@@ -94,8 +109,11 @@ int runCalibrate(int argc, char** argv) {
       "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
       "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
       "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
-      "axis) it is measured. Several --reference images of the same plane from the same pose\n"
-      "are averaged first: speckle and noise weaken, slits broken in one frame join.\n"
+      "axis) it is measured. With --intrinsics the camera's lens distortion is taken off the\n"
+      "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
+      "bend more than the projector model allows. Several --reference images of the same\n"
+      "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
+      "one frame join.\n"
       "\n"
       "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
       "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
@@ -103,6 +121,7 @@ int runCalibrate(int argc, char** argv) {
   args.repeatable("reference", "reference image of a plane (required; repeat to average several)");
   args.option("sensor", "",
               "sensor YAML: camera intrinsics and the reference pose (default: the paper's)");
+  addIntrinsicsOption(args);
   args.repeatable("plane", "DEPTH:IMAGE, a wall at DEPTH metres");
   const ReferenceConfig defaults;
   args.option("region-width", defaultText(defaults.region_width),
@@ -122,8 +141,7 @@ int runCalibrate(int argc, char** argv) {
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
   refuseOverwritingInputs(args.str("out"), inputsOf(args));
-  const SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  const SensorConfig sensor = sensorFromArgs(args);
   const ReferenceConfig rc = referenceConfigFromArgs(args);
   std::vector<cv::Mat> ref_images;
   for (const std::string& path : ref_paths) ref_images.push_back(readMonoImage(path));
@@ -138,6 +156,7 @@ int runCalibrate(int argc, char** argv) {
   }
   ref.camera_id = args.str("camera-id");
   ref.setNominalScale(sensor, sensor.mount);
+  warnOfSlitBend(ref, sensor);
 
   const std::vector<std::string> planes = args.list("plane");
   double fit_rms = 0;

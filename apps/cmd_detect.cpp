@@ -93,7 +93,8 @@ void writeJsonLine(std::ostream& out, const std::string& frame,
   out << ", \"obstacle_points\": [";
   for (std::size_t i = 0; i < listed.size(); ++i) {
     const PointRDM& p = cloud[static_cast<std::size_t>(listed[i])];
-    std::snprintf(buf, sizeof buf, "%s[%.3f, %.0f, %.4f]", i ? ", " : "", p.u, p.v, p.dk);
+    // v: a whole row, or an ideal row through a distorting lens (%g prints a whole one bare).
+    std::snprintf(buf, sizeof buf, "%s[%.3f, %.6g, %.4f]", i ? ", " : "", p.u, p.v, p.dk);
     out << buf;
   }
   out << "]}\n";
@@ -171,7 +172,7 @@ int runDetect(int argc, char** argv) {
 
   const std::vector<std::string>& frames = args.rest();
   std::vector<std::string> inputs = frames;
-  for (const char* option : {"calibration", "reference", "sensor"})
+  for (const char* option : {"calibration", "reference", "sensor", "intrinsics"})
     inputs.push_back(args.str(option));
   refuseOverwritingInputs(args.str("out"), inputs);
   OutputFile file(args.str("out"));  // whole or absent: a bad frame leaves no partial JSONL

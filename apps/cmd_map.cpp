@@ -35,6 +35,10 @@ void declareMapOptions(cli::ArgParser& args) {
   args.option("sensor", "",
               "sensor YAML: the camera's mount on the robot (default: the "
               "sequence's sensor.yaml, else the paper's sensor)");
+  args.option("intrinsics", "",
+              "the camera's OpenCV calibrateCamera or ROS camera_info YAML (focal length, "
+              "principal point, lens distortion), replacing the sensor file's; --calibration "
+              "must have been made with it");
   args.option("poses", "",
               "FILE (odometry CSV: stamp_us,x,y,z,roll,pitch,yaw), still (a robot standing at "
               "the origin) or gait (the built-in gait model walks as the decisions say); default: "
@@ -57,6 +61,7 @@ MapInputOptions inputOptions(const cli::ArgParser& args) {
   o.simulate = args.str("simulate");
   o.calibration = args.str("calibration");
   o.sensor = args.str("sensor");
+  o.intrinsics = args.str("intrinsics");
   o.fps = args.number("fps", 0.1, 1000);
   o.frames = static_cast<std::uint64_t>(args.integer("frames", 0, 1000000000));
   if (o.camera.empty()) refuseCameraOptionsWithoutCamera(args);

@@ -35,6 +35,7 @@ std::vector<std::filesystem::path> outputTargets(const cli::ArgParser& args, boo
   std::vector<std::string> inputs = images;
   inputs.push_back(args.str("calibration"));
   inputs.push_back(args.str("sensor"));
+  inputs.push_back(args.str("intrinsics"));
   for (const auto& target : targets) refuseOverwritingInputs(target, inputs);
   return targets;
 }
@@ -50,6 +51,7 @@ int runRdmap(int argc, char** argv) {
   args.option("calibration", "", "calibration file from multislit calibrate (required)");
   addExtractorOptions(args);
   args.option("sensor", "", "sensor YAML whose mount places the sensor on the robot");
+  addIntrinsicsOption(args);
   args.flag("robot-frame",
             "x, y, z in the robot frame (x forward, y left, z up) instead of the camera's");
   args.option("out", "", "PCD file (one image) or folder (several images); default: IMAGE.pcd");
@@ -60,9 +62,10 @@ int runRdmap(int argc, char** argv) {
   ExtractorConfig ec = extractorConfigFromArgs(args);
   const bool robot = args.has("robot-frame");
   if (robot) ec.frame_id = "multislit_robot";
-  const Extractor extractor(Reference::load(args.str("calibration")), ec);
-  const SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  Reference reference = Reference::load(args.str("calibration"));
+  checkIntrinsicsOf(reference, args, "calibration '" + args.str("calibration") + "'");
+  const Extractor extractor(std::move(reference), ec);
+  const SensorConfig sensor = sensorFromArgs(args);
   const Eigen::Affine3f robot_from_camera = SensorGeometry(sensor).robotFromCamera().cast<float>();
   const std::vector<std::string>& images = args.rest();
   const std::filesystem::path out = args.str("out");

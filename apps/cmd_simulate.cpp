@@ -12,8 +12,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -53,6 +55,9 @@ void addSimulateOptions(cli::ArgParser& args) {
               "same seed gives the same bytes");
   args.option("photometry", "", "preset, random or YAML: light, speckle, stripes, floor, objects");
   args.option("bit-depth", "", "8 or 16 bits per pixel (default 8, or the photometry's)");
+  args.option("distortion", "",
+              "k1,k2,p1,p2[,k3[,k4,k5,k6]]: render through a lens with OpenCV's distortion "
+              "coefficients (replacing the sensor file's; written to sensor.yaml)");
   args.option("tilt", "", "override the pose's theta [deg]");
   args.option("roll", "", "override the pose's phi [deg]");
   args.option("height", "", "override the pose's h [m]");
@@ -61,6 +66,29 @@ void addSimulateOptions(cli::ArgParser& args) {
   args.option("out", "out/simulate", "output folder");
   args.flag("no-noise", "render without speckle, shot and read noise");
   args.flag("no-reference", "skip the reference image");
+}
+
+// --distortion's coefficients, checked as the sensor file's would be.
+LensDistortion distortionFromArgs(const cli::ArgParser& args, SensorConfig sensor) {
+  const std::string text = args.str("distortion");
+  std::vector<double> numbers;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    const std::size_t end = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, end - begin);
+    char* stop = nullptr;
+    numbers.push_back(std::strtod(item.c_str(), &stop));
+    if (item.empty() || *stop != '\0')
+      throw cli::UsageError("--distortion takes numbers separated by commas, not '" + text + "'");
+    begin = end + 1;
+  }
+  try {
+    sensor.camera.distortion = LensDistortion::fromOpenCV(numbers);
+    sensor.validate();
+  } catch (const std::invalid_argument& e) {
+    throw cli::UsageError(std::string("--distortion ") + e.what());
+  }
+  return sensor.camera.distortion;
 }
 
 // --scenario or --wall-depth, with --scene and the pose's overrides.
@@ -178,6 +206,7 @@ int runSimulate(int argc, char** argv) {
   Scenario scenario = scenarioFromArgs(args);
   SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  if (args.has("distortion")) sensor.camera.distortion = distortionFromArgs(args, sensor);
   const auto seed =
       args.has("seed")
           ? static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()))

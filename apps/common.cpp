@@ -3,6 +3,8 @@
 #include "cli.h"
 #include "output_file.h"
 
+#include "multislit/intrinsics_file.h"
+
 #include <opencv2/imgcodecs.hpp>
 
 #include <cstdint>
@@ -25,10 +27,34 @@ void writeImage(const std::string& path, const cv::Mat& image) {
   file.commit();
 }
 
+void addIntrinsicsOption(cli::ArgParser& args) {
+  args.option("intrinsics", "",
+              "the camera's own calibration: OpenCV calibrateCamera YAML (camera_matrix, "
+              "distortion_coefficients) or ROS camera_info YAML; its focal length, principal "
+              "point and lens distortion replace the sensor file's");
+}
+
+SensorConfig sensorFromArgs(const cli::ArgParser& args) {
+  SensorConfig sensor =
+      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  if (args.has("intrinsics"))
+    sensor.camera = withIntrinsicsFile(sensor.camera, args.str("intrinsics"));
+  return sensor;
+}
+
+void checkIntrinsicsOf(const Reference& reference, const cli::ArgParser& args,
+                       const std::string& what) {
+  if (!args.has("intrinsics")) return;
+  const std::string& path = args.str("intrinsics");
+  reference.checkLens(intrinsicsForImage(reference.image_width, reference.image_height, path),
+                      what);
+}
+
 void addReferenceOptions(cli::ArgParser& args) {
   args.option("calibration", "", "calibration file from multislit calibrate");
   args.option("reference", "", "reference image of the floor (instead of --calibration)");
   args.option("sensor", "", "sensor YAML; its mount is the reference pose (default: the paper's)");
+  addIntrinsicsOption(args);
   addFullScaleOption(args, "the --reference image's white", "a calibration keeps its own");
 }
 
@@ -45,11 +71,12 @@ Reference referenceFromArgs(const cli::ArgParser& args) {
   if (args.has("calibration")) {
     if (full_scale > 0)
       throw cli::UsageError("--full-scale goes with --reference; a calibration keeps its own");
-    return Reference::load(args.str("calibration"));
+    Reference ref = Reference::load(args.str("calibration"));
+    checkIntrinsicsOf(ref, args, "calibration '" + args.str("calibration") + "'");
+    return ref;
   }
   if (!args.has("reference")) throw cli::UsageError("give --calibration FILE or --reference IMAGE");
-  const SensorConfig sensor =
-      args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
+  const SensorConfig sensor = sensorFromArgs(args);
   const std::string path = args.str("reference");
   Reference ref;
   try {

@@ -30,15 +30,25 @@ void addExtractorOptions(cli::ArgParser& args);
 /// The extractor config of those options.
 ExtractorConfig extractorConfigFromArgs(const cli::ArgParser& args);
 
-/// Declares --calibration, --reference, --sensor and --full-scale, the ways a command gets its
-/// reference.
+/// Declares --intrinsics: the camera's calibration file (OpenCV or ROS camera_info YAML).
+void addIntrinsicsOption(cli::ArgParser& args);
+/// The --sensor file (default: the paper's sensor) with --intrinsics, when given, applied to its
+/// camera (withIntrinsicsFile).
+SensorConfig sensorFromArgs(const cli::ArgParser& args);
+/// Throws unless --intrinsics, when given, is the lens `reference` was made with (what: names it).
+void checkIntrinsicsOf(const Reference& reference, const cli::ArgParser& args,
+                       const std::string& what);
+
+/// Declares --calibration, --reference, --sensor, --intrinsics and --full-scale, the ways a
+/// command gets its reference.
 void addReferenceOptions(cli::ArgParser& args);
 /// Declares --full-scale: `whose` white, with `note` on where the value goes.
 void addFullScaleOption(cli::ArgParser& args, const std::string& whose, const std::string& note);
 /// --full-scale's value [DN], checked to lie in [0, 65535].
 double fullScaleFromArgs(const cli::ArgParser& args);
-/// The calibration file when given, else the slits of the reference image with the sensor
-/// model's scale (the reference pose is the mount of --sensor).
+/// The calibration file when given (checked against --intrinsics), else the slits of the
+/// reference image with the sensor model's scale and lens (the reference pose is the mount of
+/// --sensor, the lens --intrinsics').
 Reference referenceFromArgs(const cli::ArgParser& args);
 
 /// A string as a JSON string literal, quotes included.

@@ -2,6 +2,8 @@
 
 #include "cli.h"
 
+#include "multislit/intrinsics_file.h"
+
 #include <filesystem>
 #include <utility>
 
@@ -17,7 +19,12 @@ MapInput openMapInput(const MapInputOptions& o, const SimulatedInputOpener& simu
     in.sensor = SensorConfig::load(o.sensor);
   else if (!o.sequence.empty() && std::filesystem::exists(sequence / "sensor.yaml"))
     in.sensor = SensorConfig::load((sequence / "sensor.yaml").string());
-  if (!o.calibration.empty()) in.reference = Reference::load(o.calibration);
+  if (!o.intrinsics.empty()) in.sensor.camera = withIntrinsicsFile(in.sensor.camera, o.intrinsics);
+  if (!o.calibration.empty()) {
+    in.reference = Reference::load(o.calibration);
+    if (!o.intrinsics.empty())
+      in.reference.checkLens(in.sensor.camera, "calibration '" + o.calibration + "'");
+  }
   if (!o.simulate.empty()) {
     if (!simulated)
       throw cli::UsageError(p + "simulate: this program was built without the simulator");

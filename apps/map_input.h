@@ -29,7 +29,10 @@ struct MapInputOptions {
   std::string simulate;     ///< scenario the simulator films
   std::string calibration;  ///< calibration YAML (needed but for simulate)
   std::string sensor;       ///< sensor YAML (default: the sequence's sensor.yaml, else the paper's)
-  double fps = 30.0;        ///< camera frame rate; with `paced`, the replay rate [Hz]
+  /// The camera's OpenCV or ROS calibration YAML, applied to the sensor's camera; a calibration
+  /// must have been made with it (Reference::checkLens). "": the sensor file's camera.
+  std::string intrinsics;
+  double fps = 30.0;         ///< camera frame rate; with `paced`, the replay rate [Hz]
   std::uint64_t frames = 0;  ///< frames the simulator renders; 0: endless [-]
   /// Recorded and simulated frames come at `fps`, as from a camera; false: as fast as taken.
   bool paced = false;

@@ -71,6 +71,90 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   std::sort(tasks_.begin(), tasks_.end(), [](const Task& a, const Task& b) {
     return a.row != b.row ? a.row < b.row : a.first < b.first;
   });
+  if (reference_.lens.distorted()) prepareIdeal();
+}
+
+namespace {
+
+/// Farthest a centre's ideal row may lie from its reference point's [px]: the lens moves two
+/// points of one recorded row, a region apart, by less than a row of each other unless it bends
+/// lines by tens of pixels; beyond, the linear reference slit is not trusted.
+constexpr double kMaxIdealRowShift = 3.0;
+
+// The cubic of IdealTask for a task on `row` around reference column u, through `lens`: exact at
+// four columns spread over u +- reach.
+Eigen::Matrix<double, 2, 4> idealCubic(const Lens& lens, double u, int row, double reach) {
+  const double nodes[4] = {-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0};
+  Eigen::Matrix4d vandermonde;
+  Eigen::Matrix<double, 4, 2> values;
+  for (int j = 0; j < 4; ++j) {
+    for (int k = 0; k < 4; ++k) vandermonde(j, k) = std::pow(nodes[j], k);
+    values.row(j) = lens.undistort(Eigen::Vector2d(u + reach * nodes[j], row)).transpose();
+  }
+  return vandermonde.fullPivLu().solve(values).transpose();
+}
+
+}  // namespace
+
+void Extractor::prepareIdeal() {
+  const Lens& lens = reference_.lens;
+  const auto width = static_cast<std::size_t>(reference_.maxSlitLength());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // A centre lies in its task's region, or up to a profile's half window beyond it.
+  const double reach = 0.5 * reference_.region_width + profileParams(CV_16U).half_window + 1.0;
+  std::vector<std::vector<Eigen::Vector3d>> ideal;  // per slit and row: ideal u, v and u_inf
+  for (const ReferenceSlit& slit : reference_.slits) {
+    ideal.emplace_back();
+    for (std::size_t k = 0; k < slit.u.size(); ++k) {
+      const Eigen::Vector2d q =
+          std::isfinite(slit.u[k]) ? reference_.idealPoint(slit, k) : Eigen::Vector2d(nan, nan);
+      ideal.back().emplace_back(q.x(), q.y(), k < slit.u_inf.size() ? slit.u_inf[k] : nan);
+    }
+  }
+  for (Task& t : tasks_) {
+    const std::vector<Eigen::Vector3d>& slit = ideal[t.cell / width];
+    const std::size_t k = t.cell % width;
+    // The slit's slope by the rows next to this one that have a point.
+    const std::size_t a = k > 0 && std::isfinite(slit[k - 1].x()) ? k - 1 : k;
+    const std::size_t b = k + 1 < slit.size() && std::isfinite(slit[k + 1].x()) ? k + 1 : k;
+    const Eigen::Vector3d slope =
+        b > a ? Eigen::Vector3d((slit[b] - slit[a]) / (slit[b].y() - slit[a].y()))
+              : Eigen::Vector3d::Zero();
+    IdealTask it;
+    it.cubic = idealCubic(lens, t.u, t.row, reach);
+    it.inverse_reach = 1.0 / reach;
+    it.u = slit[k].x(), it.v = slit[k].y(), it.u_inf = slit[k].z();
+    it.du_dv = slope.x(), it.du_inf_dv = std::isfinite(slope.z()) ? slope.z() : 0.0;
+    t.lens = static_cast<std::uint32_t>(ideal_tasks_.size());
+    ideal_tasks_.push_back(it);
+    PointRDM& p = blank_[t.cell];  // the cell's reference point in the ideal image
+    p.u = static_cast<float>(it.u);
+    p.v = static_cast<float>(it.v);
+  }
+}
+
+bool Extractor::finishIdeal(const Task& t, double centre, PointRDM* p) const {
+  const IdealTask& it = ideal_tasks_[t.lens];
+  const double s = (centre - t.u) * it.inverse_reach;
+  const Eigen::Vector2d q =
+      it.cubic.col(0) + s * (it.cubic.col(1) + s * (it.cubic.col(2) + s * it.cubic.col(3)));
+  // The reference slit at the centre's ideal row.
+  const double dv = q.y() - it.v;
+  if (!(std::abs(dv) <= kMaxIdealRowShift)) return false;
+  const double u = it.u + dv * it.du_dv;
+  p->u = static_cast<float>(u);
+  p->v = static_cast<float>(q.y());
+  p->dk = static_cast<float>(q.x() - u);
+  const double u_inf = it.u_inf + dv * it.du_inf_dv;
+  if (!std::isfinite(u_inf) || !reference_.scale.valid()) return true;
+  const MetricScale& scale = reference_.scale;
+  const double depth = scale.disparity_constant / (q.x() - u_inf);
+  if (!(depth > 0)) return true;
+  const double depth_per_px = depth / scale.f;
+  p->x = static_cast<float>((q.x() - scale.cx) * depth_per_px);
+  p->y = static_cast<float>((q.y() - scale.cy) * depth_per_px);
+  p->z = static_cast<float>(depth);
+  return true;
 }
 
 bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
@@ -85,6 +169,7 @@ bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
   }
   // The image spans columns -0.5 to cols - 0.5 (pixel centres at whole numbers).
   if (!(centre > -0.5 && centre < image.cols - 0.5)) return false;
+  if (!ideal_tasks_.empty()) return finishIdeal(t, centre, p);
   p->dk = static_cast<float>(centre - t.u);
   if (!std::isfinite(t.u_inf)) return true;
   const MetricScale& scale = reference_.scale;

@@ -1,6 +1,7 @@
 // MultiSlitGrabber: a source feeding a single-slot mailbox on one thread, extraction and the PCL
 // callbacks on another.
 #include "multislit/grabber.h"
+#include "multislit/intrinsics_file.h"
 
 #include "config_check.h"
 #include "grabber_counters.h"
@@ -136,6 +137,11 @@ MultiSlitGrabber::MultiSlitGrabber(std::shared_ptr<FrameSource> source, Referenc
       extractor_(std::move(reference), extractorConfig(config)),
       counters_(std::make_shared<Counters>()) {
   if (!source_) throw std::invalid_argument("MultiSlitGrabber: the source is null");
+  if (!config_.intrinsics.empty()) {
+    const Reference& ref = extractor_.reference();
+    ref.checkLens(intrinsicsForImage(ref.image_width, ref.image_height, config_.intrinsics),
+                  "MultiSlitGrabber: the reference");
+  }
   rdmap_signal_ = createSignal<sig_cb_rdmap>();
   frame_signal_ = createSignal<sig_cb_frame>();
   status_signal_ = createSignal<sig_cb_status>();

@@ -184,6 +184,27 @@ void Reference::checkImage(const cv::Mat& image, const std::string& what) const 
         " DN is above the white of this " + (image.depth() == CV_8U ? "8" : "16") + "-bit image");
 }
 
+Eigen::Vector2d Reference::idealPoint(const ReferenceSlit& s, std::size_t k) const {
+  const Eigen::Vector2d recorded(s.u[k], s.first_row + static_cast<double>(k));
+  return lens.distorted() ? lens.undistort(recorded) : recorded;
+}
+
+void Reference::setLens(const CameraConfig& camera) { lens = camera.lens(); }
+
+void Reference::checkLens(const CameraConfig& camera, const std::string& what) const {
+  const Lens other = camera.lens();
+  bool same_distortion = true;
+  for (const auto& [key, field] : kDistortionKeys)
+    same_distortion = same_distortion && lens.distortion().*field == other.distortion().*field;
+  const bool same_intrinsics = !lens.distorted() || (std::abs(lens.f() - other.f()) < 1e-6 &&
+                                                     std::abs(lens.cx() - other.cx()) < 1e-6 &&
+                                                     std::abs(lens.cy() - other.cy()) < 1e-6);
+  if (same_distortion && same_intrinsics) return;
+  throw std::invalid_argument(what + " was made for " +
+                              (lens.distorted() ? "another lens" : "a lens without distortion") +
+                              ", not the camera's: calibrate again with the same intrinsics");
+}
+
 void Reference::setNominalScale(const SensorConfig& sensor, const MountConfig& reference_mount) {
   if (sensor.camera.width != image_width || sensor.camera.height != image_height)
     throw std::invalid_argument("sensor config: camera is " + std::to_string(sensor.camera.width) +
@@ -191,6 +212,7 @@ void Reference::setNominalScale(const SensorConfig& sensor, const MountConfig& r
                                 " but the reference image is " + std::to_string(image_width) + "x" +
                                 std::to_string(image_height));
   const SensorGeometry g(sensor);
+  setLens(sensor.camera);
   scale.f = sensor.camera.f();
   scale.cx = sensor.camera.cx();
   scale.cy = sensor.camera.cy();
@@ -204,7 +226,8 @@ void Reference::setNominalScale(const SensorConfig& sensor, const MountConfig& r
     s.u_inf.assign(s.u.size(), kNaN);
     for (std::size_t k = 0; k < s.u.size(); ++k) {
       const double depth = d / n.dot(g.pixelRay(s.u[k], s.first_row + static_cast<double>(k)));
-      if (depth > 0) s.u_inf[k] = static_cast<float>(s.u[k] - scale.disparity_constant / depth);
+      const double u = idealPoint(s, k).x();
+      if (depth > 0) s.u_inf[k] = static_cast<float>(u - scale.disparity_constant / depth);
     }
   }
 }
@@ -214,6 +237,11 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
                                       const ReferenceConfig& config) {
   if (images.size() != depths.size() || images.size() < 2)
     throw std::invalid_argument("calibration needs images of a plane at two or more known depths");
+  if (camera.distortion.any())
+    throw std::invalid_argument(
+        "calibration with planes does not undistort the planes' slits: leave out the camera's "
+        "distortion, or use the nominal scale");
+  setLens(camera);
   std::vector<std::vector<ReferenceSlit>> seen;
   for (std::size_t k = 0; k < images.size(); ++k) {
     const std::string what =
@@ -255,6 +283,14 @@ void Reference::save(const std::string& path) const {
      << "{"
      << "source" << scale.source << "f" << scale.f << "cx" << scale.cx << "cy" << scale.cy
      << "disparity_constant" << scale.disparity_constant << "}";
+  if (lens.distorted()) {  // a pinhole's file stays as it was
+    const LensDistortion& d = lens.distortion();
+    fs << "lens"
+       << "{"
+       << "f" << lens.f() << "cx" << lens.cx() << "cy" << lens.cy();
+    for (const auto& [key, field] : kDistortionKeys) fs << key << d.*field;
+    fs << "}";
+  }
   fs << "slits"
      << "[";
   for (const ReferenceSlit& s : slits) {
@@ -266,6 +302,22 @@ void Reference::save(const std::string& path) const {
   fs << "]";
 }
 
+namespace {
+
+// The lens section of a calibration file (absent: a pinhole).
+Lens readLens(const cv::FileNode& node) {
+  checkKeys(node, "lens", {"f", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
+  double f = 1, cx = 0, cy = 0;
+  LensDistortion d;
+  readField(node, "f", f);
+  readField(node, "cx", cx);
+  readField(node, "cy", cy);
+  for (const auto& [key, field] : kDistortionKeys) readField(node, key, d.*field);
+  return Lens(f, cx, cy, d);
+}
+
+}  // namespace
+
 Reference Reference::load(const std::string& path) {
   cv::FileStorage fs = openYamlForRead(path, "calibration");
   Reference ref;
@@ -273,8 +325,9 @@ Reference Reference::load(const std::string& path) {
     const cv::FileNode root = fs.root();
     checkKeys(root, "",
               {"image_width", "image_height", "camera_id", "region_width", "max_region_width",
-               "profile_width", "smoothing_rms", "full_scale", "scale", "slits"});
+               "profile_width", "smoothing_rms", "full_scale", "scale", "lens", "slits"});
     checkKeys(fs["scale"], "scale", {"source", "f", "cx", "cy", "disparity_constant"});
+    ref.lens = readLens(fs["lens"]);
     readField(root, "image_width", ref.image_width);
     readField(root, "image_height", ref.image_height);
     readField(root, "camera_id", ref.camera_id);

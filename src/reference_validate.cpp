@@ -82,6 +82,24 @@ void validateSpacing(const Reference& ref, std::size_t k) {
               std::to_string(closest) + " px): the same slit twice, or regions that overlap");
 }
 
+/// A distorting lens is a real one, which maps the image one to one, with the scale's intrinsics.
+void validateLens(const Reference& ref) {
+  const Lens& lens = ref.lens;
+  if (!lens.distorted()) return;
+  require(std::isfinite(lens.f()) && lens.f() >= kMinFocalPx && lens.f() <= kMaxFocalPx, "lens.f",
+          "must be in [1, 1e6] px (a real lens)");
+  require(std::isfinite(lens.cx()) && lens.cx() >= -0.5 && lens.cx() <= ref.image_width - 0.5,
+          "lens.cx", "must lie inside the image");
+  require(std::isfinite(lens.cy()) && lens.cy() >= -0.5 && lens.cy() <= ref.image_height - 0.5,
+          "lens.cy", "must lie inside the image");
+  lens.distortion().validate("lens");
+  require(lens.monotonicOver(ref.image_width, ref.image_height), "lens.k1",
+          "to k6 fold the image: the radial distortion must rise out to the image's corners");
+  const MetricScale& s = ref.scale;
+  require(s.f == 0 || (s.f == lens.f() && s.cx == lens.cx() && s.cy == lens.cy()), "lens.f",
+          "cx and cy must be the scale's f, cx and cy");
+}
+
 /// The metric scale describes a real sensor (a calibration file can be edited): f of a real lens,
 /// the principal point inside the image, a baseline of 1 mm to kMaxBaseline, and every reference
 /// point in front of the sensor within kMaxReferenceDepth. Else rdmap wrote points at +-inf and
@@ -108,7 +126,7 @@ void validateScale(const Reference& ref) {
     const ReferenceSlit& slit = ref.slits[k];
     for (std::size_t j = 0; j < slit.u_inf.size() && j < slit.u.size(); ++j) {
       if (!std::isfinite(slit.u[j]) || !std::isfinite(slit.u_inf[j])) continue;
-      const double depth = s.disparity_constant / (double(slit.u[j]) - slit.u_inf[j]);
+      const double depth = s.disparity_constant / (ref.idealPoint(slit, j).x() - slit.u_inf[j]);
       require(depth > 0 && depth <= kMaxReferenceDepth,
               "slits[" + std::to_string(k) + "].u_inf[" + std::to_string(j) + "]",
               "with scale.disparity_constant puts the reference point at " + brief(depth) +
@@ -128,9 +146,9 @@ void validatePlane(const Reference& ref) {
   for (const ReferenceSlit& slit : ref.slits)
     for (std::size_t j = 0; j < slit.u.size() && j < slit.u_inf.size(); ++j) {
       if (!std::isfinite(slit.u[j]) || !std::isfinite(slit.u_inf[j])) continue;
-      const double z = s.disparity_constant / (double(slit.u[j]) - slit.u_inf[j]);
-      const double v = slit.first_row + static_cast<double>(j);
-      points.emplace_back((slit.u[j] - s.cx) * z / s.f, (v - s.cy) * z / s.f, z);
+      const Eigen::Vector2d ideal = ref.idealPoint(slit, j);
+      const double z = s.disparity_constant / (ideal.x() - slit.u_inf[j]);
+      points.emplace_back((ideal.x() - s.cx) * z / s.f, (ideal.y() - s.cy) * z / s.f, z);
       depths.push_back(z);
     }
   if (points.size() < 3) return;
@@ -168,6 +186,7 @@ void Reference::validate() const {
           "must be 0 (the image type's) or in [1, 65535] DN");
   require(std::isfinite(smoothing_rms) && smoothing_rms >= 0, "smoothing_rms",
           "must be finite and >= 0 px");
+  validateLens(*this);
   validateScale(*this);
   require(!slits.empty() && slits.size() <= 256, "slits", "must hold 1 .. 256 slits");
   for (std::size_t k = 0; k < slits.size(); ++k) validateSlit(*this, k);

@@ -26,6 +26,9 @@ void SensorConfig::validate() const {
           "over pixel_size (f, the focal length in pixels) must be in [1, 1e6] px");
   require(c.principal_x < c.width, "camera.principal_x", "must lie inside the image");
   require(c.principal_y < c.height, "camera.principal_y", "must lie inside the image");
+  c.distortion.validate("sensor config: camera");
+  require(c.lens().monotonicOver(c.width, c.height), "camera.k1",
+          "to k6 fold the image: the radial distortion must rise out to the image's corners");
   const ProjectorConfig& p = projector;
   require(p.slit_count >= 1 && p.slit_count <= 64, "projector.slit_count", "must be in [1, 64]");
   require(p.slit_spacing > 0 && p.slit_spacing * (p.slit_count - 1) < 120, "projector.slit_spacing",
@@ -59,6 +62,7 @@ void readSections(const cv::FileStorage& fs, SensorConfig& s) {
   readField(c, "focal_length", s.camera.focal_length);
   readField(c, "principal_x", s.camera.principal_x);
   readField(c, "principal_y", s.camera.principal_y);
+  for (const auto& [key, field] : kDistortionKeys) readField(c, key, s.camera.distortion.*field);
   const cv::FileNode p = fs["projector"];
   readField(p, "slit_count", s.projector.slit_count);
   readField(p, "slit_spacing", s.projector.slit_spacing);
@@ -82,7 +86,8 @@ SensorConfig SensorConfig::load(const std::string& path) {
   try {
     checkKeys(fs.root(), "", {"camera", "projector", "mount"});
     checkKeys(fs["camera"], "camera",
-              {"width", "height", "pixel_size", "focal_length", "principal_x", "principal_y"});
+              {"width", "height", "pixel_size", "focal_length", "principal_x", "principal_y", "k1",
+               "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
     checkKeys(fs["projector"], "projector",
               {"slit_count", "slit_spacing", "slit_half_length", "curvature", "sheet_sigma",
                "baseline", "rotation"});
@@ -102,6 +107,9 @@ void SensorConfig::save(const std::string& path) const {
   fs << "width" << camera.width << "height" << camera.height;
   fs << "pixel_size" << camera.pixel_size << "focal_length" << camera.focal_length;
   fs << "principal_x" << camera.principal_x << "principal_y" << camera.principal_y;
+  if (camera.distortion.any()) {  // a pinhole's file stays as it was
+    for (const auto& [key, field] : kDistortionKeys) fs << key << camera.distortion.*field;
+  }
   fs << "}";
   fs << "projector"
      << "{";
@@ -122,6 +130,7 @@ SensorGeometry::SensorGeometry(const SensorConfig& config) : config_(config) {
   f_ = config_.camera.f();
   cx_ = config_.camera.cx();
   cy_ = config_.camera.cy();
+  lens_ = config_.camera.lens();
   t_max_ = std::tan(config_.projector.slit_half_length * kDeg);
   camera_from_projector_ =
       Eigen::AngleAxisd(config_.projector.rotation * kDeg, Eigen::Vector3d::UnitZ())
@@ -159,11 +168,16 @@ double SensorGeometry::slitTan(int slit) const {
 }
 
 Eigen::Vector3d SensorGeometry::pixelRay(double u, double v) const {
+  if (lens_.distorted()) {
+    const Eigen::Vector2d ideal = lens_.undistort(Eigen::Vector2d(u, v));
+    u = ideal.x(), v = ideal.y();
+  }
   return Eigen::Vector3d((u - cx_) / f_, (v - cy_) / f_, 1.0);
 }
 
 Eigen::Vector2d SensorGeometry::project(const Eigen::Vector3d& p) const {
-  return Eigen::Vector2d(cx_ + f_ * p.x() / p.z(), cy_ + f_ * p.y() / p.z());
+  const Eigen::Vector2d ideal(cx_ + f_ * p.x() / p.z(), cy_ + f_ * p.y() / p.z());
+  return lens_.distorted() ? lens_.distort(ideal) : ideal;
 }
 
 Eigen::Vector2d SensorGeometry::toProjector(const Eigen::Vector3d& p_camera) const {

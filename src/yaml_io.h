@@ -18,11 +18,10 @@
 
 namespace multislit {
 
-/// Opens a YAML file for reading; throws std::runtime_error naming the file and what it is, when
-/// it cannot be read or yamlShapeProblem() finds something in it.
-inline cv::FileStorage openYamlForRead(const std::string& path, const std::string& what) {
-  // Read once, checked, and parsed from memory: a pipe (/dev/stdin) can be read only once.
-  const std::string text = detail::readWholeFile(path, what, kMaxYamlBytes);
+/// Parses the YAML `text` of file `path`; throws std::runtime_error naming the file and what it
+/// is, when yamlShapeProblem() finds something in it or it is not YAML of a map.
+inline cv::FileStorage openYamlText(const std::string& text, const std::string& path,
+                                    const std::string& what) {
   const std::string problem = yamlShapeProblem(text);
   if (!problem.empty()) throw std::runtime_error(what + " '" + path + "': " + problem);
   cv::FileStorage fs;
@@ -40,6 +39,13 @@ inline cv::FileStorage openYamlForRead(const std::string& path, const std::strin
   if (!fs.root().empty() && !fs.root().isMap())
     throw std::runtime_error(what + " '" + path + "' must be a map of keys");
   return fs;
+}
+
+/// Opens a YAML file for reading; throws std::runtime_error naming the file and what it is, when
+/// it cannot be read or yamlShapeProblem() finds something in it.
+inline cv::FileStorage openYamlForRead(const std::string& path, const std::string& what) {
+  // Read once, checked, and parsed from memory: a pipe (/dev/stdin) can be read only once.
+  return openYamlText(detail::readWholeFile(path, what, kMaxYamlBytes), path, what);
 }
 
 inline cv::FileStorage openYamlForWrite(const std::string& path, const std::string& what) {

@@ -3,6 +3,8 @@
 #include "multislit/grabber.h"
 #include "camera_test_support.h"
 #include "grabber_test_support.h"
+#include "multislit/intrinsics_file.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
@@ -134,6 +136,25 @@ TEST(MultiSlitGrabber, OffersPclSignals) {
   bad.poll_ms = 0;
   EXPECT_THROW((MultiSlitGrabber{source, slitReference(), bad}), std::invalid_argument);
   EXPECT_THROW((MultiSlitGrabber{nullptr, slitReference()}), std::invalid_argument);
+}
+
+// GrabberConfig::intrinsics: the reference must carry the camera calibration's lens.
+TEST(MultiSlitGrabber, RefusesAReferenceOfAnotherLens) {
+  auto source = std::make_shared<MemorySource>(std::vector<cv::Mat>{slitImage(0)}, 0, true);
+  Reference reference = slitReference();
+  const std::string path = tempPath("camera_info.yaml");
+  std::ofstream(path) << "image_width: " << reference.image_width
+                      << "\nimage_height: " << reference.image_height
+                      << "\ncamera_matrix: {rows: 3, cols: 3, data: [300, 0, 240, 0, 300, 120, 0, "
+                         "0, 1]}\ndistortion_model: plumb_bob\n"
+                         "distortion_coefficients: {rows: 1, cols: 5, data: [-0.1, 0, 0, 0, 0]}\n";
+  GrabberConfig config;
+  config.intrinsics = path;
+  EXPECT_THROW((MultiSlitGrabber{source, reference, config}), std::invalid_argument);
+  reference.setLens(intrinsicsForImage(reference.image_width, reference.image_height, path));
+  EXPECT_NO_THROW((MultiSlitGrabber{source, reference, config}));
+  config.intrinsics = tempPath("absent.yaml");
+  EXPECT_THROW((MultiSlitGrabber{source, reference, config}), std::runtime_error);
 }
 
 TEST(MultiSlitGrabber, DeliversEveryFrameOfASourceThatWaitsInOrder) {

@@ -57,7 +57,12 @@ class Extractor {
   /// The RDMap of `image`: one cloud row per slit, one column per reference row of that slit
   /// (column j of slit i is image row first_row_i + j); NaN where nothing valid was measured.
   /// x, y, z in metres in the camera frame when the reference has a metric scale (else NaN).
-  /// Throws std::invalid_argument when the image does not fit the reference.
+  /// Through a distorting lens (Reference::lens) the centre found on recorded row first_row_i + j
+  /// is undistorted to (u', v') of the ideal image, where the slit's epipolar lines are rows
+  /// again: the point's u and v are the reference slit's ideal point on ideal row v' (v' is not
+  /// a whole number; linear along the slit from the reference point) and dk = u' - u, so that a
+  /// plane stays a plane in (u, v, dk) (eq. 1-3). The cell stays the recorded row's: column j of
+  /// slit i. Throws std::invalid_argument when the image does not fit the reference.
   ExtractionStats extract(const cv::Mat& image, pcl::PointCloud<PointRDM>& cloud) const;
   /// Same, with the PCL header set: stamp in microseconds since the epoch, seq, frame_id.
   pcl::PointCloud<PointRDM>::Ptr extract(const cv::Mat& image, std::uint64_t stamp_us,
@@ -73,6 +78,18 @@ class Extractor {
     float u = 0;              ///< reference column [px]
     float u_inf = 0;          ///< column of the ray at infinite depth [px]; NaN: no metric scale
     float slope = 0;          ///< the reference slit's du/dv here [-]
+    std::uint32_t lens = 0;   ///< index into ideal_tasks_ (distorting lens only)
+  };
+  /// Through a distorting lens, per task: the ideal point of a centre at column c of its
+  /// recorded row, a cubic in s = (c - u) / reach (u the task's reference column) exact at
+  /// s = -1, -1/3, 1/3, 1; and its reference slit near its reference point in the ideal image,
+  /// linear in the ideal row (a centre's ideal row lies within a row or two of it). A few
+  /// multiplications a point, no search and no branch.
+  struct IdealTask {
+    Eigen::Matrix<double, 2, 4> cubic;  ///< coefficients of s^0 .. s^3, ideal u and v
+    double inverse_reach = 0;           ///< 1 / reach [1/px]
+    double u = 0, v = 0, du_dv = 0;     ///< the reference point (ideal) and its slit's slope
+    double u_inf = 0, du_inf_dv = 0;    ///< its u_inf (NaN: none) and that's slope
   };
 
   /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
@@ -80,6 +97,12 @@ class Extractor {
   /// left unmeasured, when the centre lies beyond the image's edge (a fit pulled past it).
   bool finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
               PointRDM* p) const;
+  /// finish()'s last step through a distorting lens: the centre on task t's recorded row to
+  /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
+  /// the reference slit's ends.
+  bool finishIdeal(const Task& t, double centre, PointRDM* p) const;
+  /// Each task's IdealTask.
+  void prepareIdeal();
   template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
@@ -87,6 +110,7 @@ class Extractor {
   Reference reference_;
   ExtractorConfig config_;
   std::vector<Task> tasks_;  ///< by image row, then column: the image is read top to bottom once
+  std::vector<IdealTask> ideal_tasks_;           ///< distorting lens only
   pcl::PointCloud<PointRDM>::VectorType blank_;  ///< the cloud before anything is measured
 };
 

@@ -27,6 +27,9 @@ struct GrabberConfig {
   int stop_timeout_ms = 500;  ///< stop() waits at most this for the source to let go [ms]
   int release_timeout_ms = 15000;  ///< start() and the destructor wait at most this for a source
                                    ///< still stuck in a call from an earlier run [ms]
+  /// The camera's OpenCV or ROS camera_info calibration YAML; when given, the reference must have
+  /// been made with its lens (Reference::checkLens), which the reference carries. "": unchecked.
+  std::string intrinsics;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };

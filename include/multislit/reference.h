@@ -39,6 +39,7 @@ struct ReferenceSlit {
 
 /// Scale of the disparity: a point seen at column u' on a row of reference point (u, u_inf) lies
 /// at depth Z = disparity_constant / (u' - u_inf) with x = (u' - cx) Z / f, y = (v - cy) Z / f.
+/// With a distorting lens (Reference::lens) u', v, u and u_inf are ideal (undistorted) pixels.
 struct MetricScale {
   double f = 0.0, cx = 0.0, cy = 0.0;  ///< camera intrinsics [px]
   double disparity_constant = 0.0;     ///< f times the baseline [px m]
@@ -57,8 +58,11 @@ class Reference {
   int joined_pieces = 0;                  ///< slit pieces joined across gaps when found [-]
   int dropped_tracks = 0;                 ///< tracks found that were not slits (speckle) [-]
   double full_scale = 0.0;  ///< the camera's white [DN] (ReferenceConfig); 0: the image type's
-  std::vector<ReferenceSlit> slits;
+  std::vector<ReferenceSlit> slits;  ///< as recorded: where the extractor looks for the slits
   MetricScale scale;
+  /// The camera's lens. When it distorts, the RDMap and the metric step use the slits' ideal
+  /// points (idealPoint()) and u_inf is an ideal column; a pinhole's points are the recorded ones.
+  Lens lens;
 
   /// Finds the slits in an image of a plane (8- or 16-bit, one channel). Throws
   /// std::runtime_error saying what was found when the slits are not the expected ones.
@@ -67,6 +71,16 @@ class Reference {
   /// type): their mean, in which speckle and noise are weaker than in any one of them.
   static Reference fromImages(const std::vector<cv::Mat>& images,
                               const ReferenceConfig& config = {});
+  /// The ideal (undistorted) pixel of slit s's point on its k-th row: (u[k], first_row + k)
+  /// through the lens.
+  Eigen::Vector2d idealPoint(const ReferenceSlit& s, std::size_t k) const;
+  /// The lens of `camera` (its focal length, principal point and distortion). setNominalScale()
+  /// and calibrateWithPlanes() set it too.
+  void setLens(const CameraConfig& camera);
+  /// Throws std::invalid_argument unless `camera` has this reference's lens: the same
+  /// distortion and, when it distorts, the same f, cx and cy (to 1e-6 px). A calibration's lens
+  /// is the one it was made with (calibrate --intrinsics); another would misplace every point.
+  void checkLens(const CameraConfig& camera, const std::string& what) const;
   /// Reference points with a position, and the longest slit (the RDMap cloud's width).
   std::size_t pointCount() const;
   int maxSlitLength() const;
@@ -76,7 +90,8 @@ class Reference {
   /// Metric scale from the sensor model: the reference plane is the floor seen from `mount`.
   void setNominalScale(const SensorConfig& sensor, const MountConfig& reference_mount);
   /// Metric scale from images of a flat wall facing the sensor at known depths (>= 2), as
-  /// measured along the optical axis with a tape. Returns the rms fit residual [px].
+  /// measured along the optical axis with a tape. Returns the rms fit residual [px]. Refuses a
+  /// distorting lens (std::invalid_argument): the planes' points are not undistorted here.
   double calibrateWithPlanes(const std::vector<cv::Mat>& images, const std::vector<double>& depths,
                              const CameraConfig& camera, const ReferenceConfig& config = {});
 

@@ -1,6 +1,8 @@
 // The multi-slit range sensor of the paper (Sec. II): camera, laser projector, and its mount.
 #pragma once
 
+#include "multislit/lens.h"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -17,7 +19,8 @@ constexpr double kMinFocalPx = 1.0, kMaxFocalPx = 1e6;
 /// Longest projector baseline [m]; a calibration's (disparity_constant / f) is held to it too.
 constexpr double kMaxBaseline = 1.0;
 
-/// Pinhole camera without lens distortion. Pixel centres are at integer coordinates (OpenCV).
+/// Pinhole camera with OpenCV's lens distortion (none by default). Pixel centres are at integer
+/// coordinates (OpenCV). The pixels are square: one focal length f for both axes.
 struct CameraConfig {
   int width = 1296;              ///< [px]
   int height = 964;              ///< [px]
@@ -25,10 +28,12 @@ struct CameraConfig {
   double focal_length = 4.0e-3;  ///< lens focal length [m]
   double principal_x = -1.0;     ///< principal point u [px]; negative: image centre
   double principal_y = -1.0;     ///< principal point v [px]; negative: image centre
+  LensDistortion distortion;     ///< OpenCV's coefficients; all zero: a pinhole
 
   double f() const { return focal_length / pixel_size; }  ///< focal length [px]
   double cx() const { return principal_x < 0 ? 0.5 * (width - 1) : principal_x; }
   double cy() const { return principal_y < 0 ? 0.5 * (height - 1) : principal_y; }
+  Lens lens() const { return Lens(f(), cx(), cy(), distortion); }
 };
 
 /// Multi-slit laser projector (StockerYale Mini-715L in the paper). In its own frame a slit i is
@@ -79,10 +84,14 @@ class SensorGeometry {
   /// Largest |t| of a slit (tan of its half length).
   double slitTMax() const { return t_max_; }
 
-  /// Ray through pixel (u, v) in the camera frame, with z = 1.
+  /// Ray through pixel (u, v) of the recorded image in the camera frame, with z = 1 (through the
+  /// lens's distortion, if any).
   Eigen::Vector3d pixelRay(double u, double v) const;
-  /// Image position of a camera-frame point (z > 0).
+  /// Position of a camera-frame point (z > 0) in the recorded image (through the lens).
   Eigen::Vector2d project(const Eigen::Vector3d& p_camera) const;
+  /// The camera's lens: between recorded and ideal (pinhole) pixels. rowOf(), slitParamForRow()
+  /// and slitRows() speak of ideal rows, where the epipolar lines are rows.
+  const Lens& lens() const { return lens_; }
 
   /// Projector centre in the camera frame.
   const Eigen::Vector3d& projectorCentre() const { return projector_centre_; }
@@ -132,6 +141,7 @@ class SensorGeometry {
  private:
   SensorConfig config_;
   double f_, cx_, cy_, t_max_;
+  Lens lens_;
   Eigen::Matrix3d camera_from_projector_;  // rotation about z by the pattern rotation
   std::vector<double> slit_tan_;           // tan(alpha_i)
   std::vector<double> boundary_tan_;       // tan of the angles midway between adjacent slits

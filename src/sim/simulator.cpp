@@ -44,7 +44,10 @@ std::vector<SlitCrossing> slitTruth(const SensorGeometry& geometry, const Scene&
     const double range = to_point.norm();
     const Hit seen = scene.intersect(camera_centre, to_point / range, range * (1.0 - 1e-9));
     if (seen.valid()) continue;  // hidden from the camera
-    const Eigen::Vector2d uv = geometry.project(point_c);
+    // Through a distorting lens the crossing is given in the ideal image, whose rows these are.
+    const Eigen::Vector2d uv = geometry.lens().distorted()
+                                   ? geometry.lens().undistort(geometry.project(point_c))
+                                   : geometry.project(point_c);
     if (uv.x() < 0 || uv.x() > width - 1) continue;
     SlitCrossing x;
     x.slit = slit;
@@ -114,16 +117,19 @@ RenderedFrame Simulator::render(const Scene& scene, const Eigen::Isometry3d& wor
                 sigma};
   const double reach = sheetReach(scene, sigma, pixel);
   const std::vector<ShadowBox> casters = shadowBoxes(shader);
-  if (render_.method == RenderMethod::Culled) shader.casters = &casters;
-  const FloorAlbedo floor_albedo(scene.floor, render_.method == RenderMethod::Culled
-                                                  ? floorInView(shader)
-                                                  : Eigen::AlignedBox2d());
+  // The culled method's closed-form rows and object bounds are a pinhole's: a distorting lens
+  // has every pixel's ray traced.
+  const RenderMethod method =
+      geometry_.lens().distorted() ? RenderMethod::Exhaustive : render_.method;
+  if (method == RenderMethod::Culled) shader.casters = &casters;
+  const FloorAlbedo floor_albedo(
+      scene.floor, method == RenderMethod::Culled ? floorInView(shader) : Eigen::AlignedBox2d());
   shader.floor_albedo = &floor_albedo;
 
   // 1. Every pixel centre: its surface, ambient light and where the laser sheets are.
   std::unique_ptr<RenderBuffers> buffers = pool_->take();
   const CentreSamples& centre = buffers->centre;
-  traceCentres(shader, reach, pixel, render_.method, buffers->centre);
+  traceCentres(shader, reach, pixel, method, buffers->centre);
   lap(spent.centres);
   // 2. Laser light integrated over each pixel near a sheet. With the laser off every pixel has
   // none; integrateLaser() would sample each near pixel n x n, finding no lit neighbours.

@@ -54,7 +54,8 @@ struct RenderConfig {
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
 
-/// Where slit `slit` crosses image row `row`: the exact centre of its light on that row.
+/// Where slit `slit` crosses image row `row`: the exact centre of its light on that row. Through
+/// a distorting lens (CameraConfig::distortion) row and u are the ideal (undistorted) image's.
 struct SlitCrossing {
   int slit = 0;                                            ///< 0 .. slit_count-1, by angle
   int row = 0;                                             ///< image row v [px]
