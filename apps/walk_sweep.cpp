@@ -121,30 +121,30 @@ void drawHistogram(const std::string& path, const Histogram& h) {
       shares.push_back(all > 0 ? 100.0 * static_cast<double>(counts[i]) / all : 0.0);
     }
   };
-  add("floor", h.floor);
-  add("object", h.object);
-  drawBarChart(path, h.title, "% of the passes of the kind", labels, shares);
+  add("F", h.floor);
+  add("O", h.object);
+  drawBarChart(path, std::string(h.title) + " (F: no object, O: on an object)",
+               "% of the passes of the kind", labels, shares);
 }
 
 }  // namespace
 
 void writeSweepHistograms(const std::string& folder, const SweepHistograms& s) {
-  const Histogram histograms[] = {
-      {"runs",
-       "passes above the floor, by their longest run of frames in a row",
-       {"1", "2", "3", "4", "5+"},
-       s.floor.run,
-       s.object.run},
-      {"balance",
-       "passes by sign balance: (frames above - below) / frames",
-       {"<-0.6", "-0.6..-0.2", "-0.2..0.2", "0.2..0.6", ">0.6"},
-       s.floor.balance,
-       s.object.balance},
-      {"extent",
-       "passes by the sweep of their longest one-signed run [mm]",
-       {"<1", "1-2", "2-3", "3-5", "5-10", "10+"},
-       s.floor.extent,
-       s.object.extent}};
+  const Histogram histograms[] = {{"runs",
+                                   "passes above the floor by their longest run of frames",
+                                   {"1", "2", "3", "4", "5+"},
+                                   s.floor.run,
+                                   s.object.run},
+                                  {"balance",
+                                   "passes by (frames above - below) / frames",
+                                   {"<-.6", "-.4", "0", ".4", ">.6"},
+                                   s.floor.balance,
+                                   s.object.balance},
+                                  {"extent",
+                                   "passes by the sweep of their longest run [mm]",
+                                   {"<1", "1-2", "2-3", "3-5", "5-10", "10+"},
+                                   s.floor.extent,
+                                   s.object.extent}};
   OutputFile csv(std::filesystem::path(folder) / "sweep_histograms.csv");
   csv.stream() << "histogram,bin,floor_passes,object_passes\n";
   for (const Histogram& h : histograms) {
