@@ -84,7 +84,8 @@ TEST(Walk, TiledFloorStaysEmptyWalkingTurningInPlaceAndStanding) {
   config.scene.ball = config.scene.cable = false;
   applyPhotometry(choosePhotometry("tiles", 1), config);
   WalkSimulation walk(config);
-  const int walking = frameCount(48, 12), turning = frameCount(96, 24),
+  // Whole steps (24 frames each): a step under way is finished before the next command.
+  const int walking = frameCount(48, 24), turning = frameCount(96, 24),
             standing = frameCount(48, 6);
   std::size_t most = 0;
   // The slits' move at the middle of the view, summed per what the body did since the last frame
