@@ -186,11 +186,12 @@ SweepStep SlitSweep::finish(double dead_zone) {
   Eigen::Vector3d fit = Eigen::Vector3d::Zero();
   if (!fitAffine(moves_, moved_at_, centre, fit, std::numeric_limits<double>::infinity(), fit))
     return step;
+  const auto fitted = [&](const Eigen::Vector2f& at) {  // the fit's move at `at` [m]
+    return fit[0] + fit[1] * (at.x() - centre.x()) + fit[2] * (at.y() - centre.y());
+  };
   residuals_.clear();
   for (std::size_t j = 0; j < moves_.size(); ++j)
-    residuals_.push_back(
-        std::abs(moves_[j] - static_cast<float>(fit[0] + fit[1] * (moved_at_[j].x() - centre.x()) +
-                                                fit[2] * (moved_at_[j].y() - centre.y()))));
+    residuals_.push_back(std::abs(moves_[j] - static_cast<float>(fitted(moved_at_[j]))));
   const auto mid = residuals_.begin() + static_cast<std::ptrdiff_t>(residuals_.size() / 2);
   std::nth_element(residuals_.begin(), mid, residuals_.end());
   constexpr double kMinKeep = 2e-4;  // [m]: below the points' own noise, nothing is an outlier
@@ -198,9 +199,7 @@ SweepStep SlitSweep::finish(double dead_zone) {
   if (!fitAffine(moves_, moved_at_, centre, fit, keep, fit)) return step;
   // The largest move in the view: below the dead zone, the slits did not move.
   double largest = 0.0;
-  for (const Eigen::Vector2f& at : moved_at_)
-    largest = std::max(largest, std::abs(fit[0] + fit[1] * (at.x() - centre.x()) +
-                                         fit[2] * (at.y() - centre.y())));
+  for (const Eigen::Vector2f& at : moved_at_) largest = std::max(largest, std::abs(fitted(at)));
   if (largest <= dead_zone) return step;
   step.per_x = fit[1];
   step.per_y = fit[2];

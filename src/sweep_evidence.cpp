@@ -117,6 +117,15 @@ struct SweepEvidence::State {
   static void update(Place& place, const FrameFlags& flags, const SweepEvidenceConfig& c,
                      double sweep, std::uint64_t frame);
   SweepVerdict judge(std::uint64_t key, const Place& place, const SweepEvidenceConfig& c) const;
+  /// The place (dx, dy) columns from `key`; nullptr when it holds no evidence.
+  const Place* neighbour(std::uint64_t key, int dx, int dy) const {
+    const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
+    return it == places.end() ? nullptr : &it->second;
+  }
+  /// Weak passes above the floor, or evidence above it in the pass under way.
+  static bool weakOrUnderWayAbove(const Place& p) {
+    return p.weak_passes > 0 || (p.in_pass && p.above.frames > 0);
+  }
   /// Whether a place within lobe_radius of `key` holds a dark line's other lobe: evidence above
   /// the floor beside a hole (`above`), consistent evidence below it beside an object.
   bool nearOtherLobe(std::uint64_t key, bool above, const SweepEvidenceConfig& c) const;
@@ -257,13 +266,12 @@ bool SweepEvidence::State::nearOtherLobe(std::uint64_t key, bool above,
   const int r = c.lobe_radius;
   for (int dx = -r; dx <= r; ++dx)
     for (int dy = -r; dy <= r; ++dy) {
-      const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
-      if (it == places.end() || (dx == 0 && dy == 0)) continue;
-      const Place& q = it->second;
+      const Place* q = neighbour(key, dx, dy);
+      if (q == nullptr || (dx == 0 && dy == 0)) continue;
       // Beside a hole, anything above the floor is a line's other lobe; an object is known by
       // consistent evidence below beside it.
-      if (above ? q.above_passes > 0 || q.weak_passes > 0 || (q.in_pass && q.above.frames > 0)
-                : q.below_passes > 0 || consistent(q.below, q.above, c))
+      if (above ? q->above_passes > 0 || weakOrUnderWayAbove(*q)
+                : q->below_passes > 0 || consistent(q->below, q->above, c))
         return true;
     }
   return false;
@@ -291,12 +299,9 @@ bool SweepEvidence::State::nearSunk(std::uint64_t key, int radius) const {
 }
 
 bool SweepEvidence::State::onWeakLine(std::uint64_t key) const {
-  // A neighbour with evidence above the floor: weak passes, or the pass under way.
   const auto weak = [&](int dx, int dy) {
-    const auto it = places.find(packColumn(columnX(key) + dx, columnY(key) + dy));
-    if (it == places.end()) return false;
-    const Place& p = it->second;
-    return p.weak_passes > 0 || (p.in_pass && p.above.frames > 0);
+    const Place* p = neighbour(key, dx, dy);
+    return p != nullptr && weakOrUnderWayAbove(*p);
   };
   // A line at an angle to the map's axes steps over to the next row or column of cells.
   const auto weakAcross = [&](int dx, int dy) {  // (dx, dy) or a cell beside it, across
