@@ -53,20 +53,58 @@ struct PlaneObservation {
   }
 };
 
-// Every point of the reference slits `slits` as seen on the plane images at `depths`
-// (`seen`: their slits, in the same order).
-std::vector<PlaneObservation> observeOnPlanes(const std::vector<ReferenceSlit>& slits,
+/// A plane image's slit through the lens: each recorded point's ideal (undistorted) pixel, NaN
+/// where the slit has no point.
+std::vector<Eigen::Vector2d> idealSlit(const Lens& lens, const ReferenceSlit& p) {
+  std::vector<Eigen::Vector2d> ideal(p.u.size(), Eigen::Vector2d::Constant(kNaN));
+  for (std::size_t k = 0; k < p.u.size(); ++k)
+    if (std::isfinite(p.u[k]))
+      ideal[k] = lens.undistort({p.u[k], p.first_row + static_cast<double>(k)});
+  return ideal;
+}
+
+/// The ideal column where a plane slit (`ideal`: idealSlit(), first recorded row `first_row`)
+/// crosses ideal row `v`, linear between its two ideal points around it, searched near recorded
+/// row `row`; NaN where it does not cross there.
+double idealColumnAt(const std::vector<Eigen::Vector2d>& ideal, int first_row, double v, int row) {
+  constexpr int kReach = 16;  // rows a lens moves a point at most, between ideal and recorded
+  const long lo = std::max(0L, static_cast<long>(row) - first_row - kReach);
+  const long hi =
+      std::min(static_cast<long>(ideal.size()) - 1, static_cast<long>(row) - first_row + kReach);
+  for (long k = lo; k < hi; ++k) {
+    const Eigen::Vector2d& a = ideal[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d& b = ideal[static_cast<std::size_t>(k + 1)];
+    if (!(a.allFinite() && b.allFinite()) || !((a.y() - v) * (b.y() - v) <= 0) || a.y() == b.y())
+      continue;
+    return a.x() + (v - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+  }
+  return kNaN;
+}
+
+// Every point of the reference `ref` as seen on the plane images at `depths` (`seen`: their
+// slits, in the same order). Through a distorting lens, in the ideal image: a point at its ideal
+// row, where the eq. u = u_inf + K / Z holds.
+std::vector<PlaneObservation> observeOnPlanes(const Reference& ref,
                                               const std::vector<std::vector<ReferenceSlit>>& seen,
                                               const std::vector<double>& depths) {
+  const bool ideal = ref.lens.distorted();
+  std::vector<std::vector<std::vector<Eigen::Vector2d>>> ideal_seen(seen.size());
+  if (ideal)
+    for (std::size_t k = 0; k < seen.size(); ++k)
+      for (const ReferenceSlit& p : seen[k]) ideal_seen[k].push_back(idealSlit(ref.lens, p));
   std::vector<PlaneObservation> obs;
-  for (std::size_t s = 0; s < slits.size(); ++s)
-    for (std::size_t r = 0; r < slits[s].u.size(); ++r) {
+  for (std::size_t s = 0; s < ref.slits.size(); ++s)
+    for (std::size_t r = 0; r < ref.slits[s].u.size(); ++r) {
       PlaneObservation o{s, r, {}};
-      const int row = slits[s].first_row + static_cast<int>(r);
+      const int row = ref.slits[s].first_row + static_cast<int>(r);
+      const double v = ideal ? ref.idealPoint(ref.slits[s], r).y() : 0.0;
       for (std::size_t k = 0; k < seen.size(); ++k) {
         const ReferenceSlit& p = seen[k][s];
-        if (row < p.first_row || row > p.lastRow()) continue;
-        const float u = p.u[static_cast<std::size_t>(row - p.first_row)];
+        const double u =
+            ideal ? idealColumnAt(ideal_seen[k][s], p.first_row, v, row)
+            : row < p.first_row || row > p.lastRow()
+                ? kNaN
+                : static_cast<double>(p.u[static_cast<std::size_t>(row - p.first_row)]);
         if (std::isfinite(u)) o.wu.emplace_back(1.0 / depths[k], u);
       }
       obs.push_back(std::move(o));
@@ -237,10 +275,6 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
                                       const ReferenceConfig& config) {
   if (images.size() != depths.size() || images.size() < 2)
     throw std::invalid_argument("calibration needs images of a plane at two or more known depths");
-  if (camera.distortion.any())
-    throw std::invalid_argument(
-        "calibration with planes does not undistort the planes' slits: leave out the camera's "
-        "distortion, or use the nominal scale");
   setLens(camera);
   std::vector<std::vector<ReferenceSlit>> seen;
   for (std::size_t k = 0; k < images.size(); ++k) {
@@ -251,7 +285,7 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
     seen.push_back(detectSlits(images[k], config, what).slits);
   }
   // u_k = u_inf + K / Z_k for every reference point: one K for all, u_inf per point.
-  const std::vector<PlaneObservation> obs = observeOnPlanes(slits, seen, depths);
+  const std::vector<PlaneObservation> obs = observeOnPlanes(*this, seen, depths);
   const double k_fb = fitDisparityConstant(obs);
   double ss = 0;
   std::size_t m = 0;

@@ -58,8 +58,9 @@ void validateSlit(const Reference& ref, std::size_t k) {
     require(std::isfinite(u) && u >= 0 && u <= static_cast<float>(ref.image_width - 1),
             name + ".u[" + std::to_string(j) + "]",
             "must be a column inside the image or .nan (is " + std::to_string(u) + ")");
-    require(s.u_inf.empty() || std::isfinite(s.u_inf[j]),
-            name + ".u_inf[" + std::to_string(j) + "]", "must be finite where u is");
+    // .nan: no metric point there (a wall calibration that saw the point on fewer than two walls)
+    require(s.u_inf.empty() || !std::isinf(s.u_inf[j]), name + ".u_inf[" + std::to_string(j) + "]",
+            "must be finite or .nan where u is");
     ++measured;
   }
   require(measured > 0, name + ".u", "must hold at least one measured column");

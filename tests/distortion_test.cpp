@@ -152,3 +152,35 @@ TEST(Distortion, SlitBendFlagsTheMissingCoefficients) {
   EXPECT_LT(with_lens, kMaxSlitBend);
   EXPECT_GT(without_lens, kMaxSlitBend);
 }
+
+// The metric scale from walls at known depths through the distorting lens: the walls' slits are
+// undistorted as the reference's are, so the scale is the pinhole's and the floor's depth as
+// accurate (the wall test of extractor_test, with the lens).
+TEST(Distortion, WallCalibrationThroughTheLens) {
+  const Cameras& c = cameras();
+  const Simulator sim(c.distorted);
+  const std::vector<double> depths = {0.35, 0.5, 0.7};
+  std::vector<cv::Mat> walls;
+  for (double d : depths) {
+    const Scenario wall = makeWallScenario(d);
+    walls.push_back(sim.render(wall.scene,
+                               wall.worldFromRobot(0) * sim.geometry().robotFromCamera(wall.mount),
+                               0)
+                        .image);
+  }
+  Reference ref = c.with_lens;
+  const double rms = ref.calibrateWithPlanes(walls, depths, c.distorted.camera);
+  const double fb = c.distorted.camera.f() * c.distorted.projector.baseline;
+  const Extractor extractor(ref);
+  const Eigen::Isometry3d robot = SensorGeometry(c.distorted).robotFromCamera(tableIPose(0));
+  const FloorFigures w = floorFigures(extractor, c.distorted_images[0], robot);
+  std::printf(
+      "wall calibration through the lens: f*b %.4f (true %.4f) px m, fit rms %.3f px, "
+      "floor height rms %.2f mm over %zu points\n",
+      ref.scale.disparity_constant, fb, rms, 1e3 * w.height_rms, w.points);
+  EXPECT_EQ(ref.scale.source, "planes");
+  EXPECT_NEAR(ref.scale.disparity_constant, fb, 0.005 * fb);
+  EXPECT_LT(rms, 0.3);
+  EXPECT_LT(w.height_rms, 0.001);  // the pinhole's nominal scale gives 0.24 mm at this pose
+  EXPECT_GE(w.points, 4300u);
+}

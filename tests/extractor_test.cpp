@@ -349,6 +349,10 @@ TEST(Metric, WallCalibrationGivesRangeWithinOnePercent) {
   const double fb = SensorConfig{}.camera.f() * SensorConfig{}.projector.baseline;
   EXPECT_NEAR(ref.scale.disparity_constant, fb, 0.005 * fb);  // f * baseline within 0.5%
   EXPECT_LT(rms, 0.3);
+  // Saved and loaded: reference points no wall saw twice keep no metric point (.nan).
+  const std::string path = tempPath("multislit_wall_calibration.yaml");
+  ref.save(path);
+  EXPECT_NO_THROW(Reference::load(path));
   const Extractor ex(ref);
   const Scenario s = makeScenario("reference");
   const RenderedFrame f = renderScenario(s, 11);

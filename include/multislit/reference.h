@@ -90,8 +90,9 @@ class Reference {
   /// Metric scale from the sensor model: the reference plane is the floor seen from `mount`.
   void setNominalScale(const SensorConfig& sensor, const MountConfig& reference_mount);
   /// Metric scale from images of a flat wall facing the sensor at known depths (>= 2), as
-  /// measured along the optical axis with a tape. Returns the rms fit residual [px]. Refuses a
-  /// distorting lens (std::invalid_argument): the planes' points are not undistorted here.
+  /// measured along the optical axis with a tape. Returns the rms fit residual [px]. Through a
+  /// distorting lens (camera.distortion) the planes' slits are undistorted first and the scale is
+  /// fitted in the ideal image, where the RDMap's relation holds.
   double calibrateWithPlanes(const std::vector<cv::Mat>& images, const std::vector<double>& depths,
                              const CameraConfig& camera, const ReferenceConfig& config = {});
 
