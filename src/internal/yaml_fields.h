@@ -16,13 +16,15 @@
 namespace multislit {
 
 /// One key of a config struct S and the member that holds its value. An `unsigned` is written as
-/// a real (OpenCV's integers are 32-bit signed). A LensDistortion stands for the keys of its eight
-/// coefficients (kDistortionKeys; its own key is not used), written only when one is not zero: a
-/// pinhole's file stays as it was.
+/// a real (OpenCV's integers are 32-bit signed), a list of floats only when it is not empty. A
+/// LensDistortion stands for the keys of its eight coefficients (kDistortionKeys; its own key is
+/// not used), written only when one is not zero: a pinhole's file stays as it was.
 template <typename S>
 struct Field {
   const char* key;
-  std::variant<int S::*, unsigned S::*, double S::*, std::string S::*, LensDistortion S::*> member;
+  std::variant<int S::*, unsigned S::*, double S::*, std::string S::*, std::vector<float> S::*,
+               LensDistortion S::*>
+      member;
 };
 
 namespace detail {
@@ -71,6 +73,8 @@ void writeFields(cv::FileStorage& fs, const Table& table, const S& s) {
         if ((s.*m).any()) writeFields(fs, kDistortionKeys, s.*m);
       } else if constexpr (std::is_same_v<T, unsigned>) {
         fs << key << static_cast<double>(s.*m);
+      } else if constexpr (std::is_same_v<T, std::vector<float>>) {
+        if (!(s.*m).empty()) fs << key << s.*m;
       } else {
         fs << key << s.*m;
       }
