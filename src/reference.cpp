@@ -2,7 +2,7 @@
 
 #include "config_check.h"
 #include "slit_tracks.h"
-#include "yaml_io.h"
+#include "yaml_fields.h"
 
 #include <Eigen/Dense>
 #include <opencv2/core.hpp>
@@ -305,86 +305,89 @@ double Reference::calibrateWithPlanes(const std::vector<cv::Mat>& images,
   return std::sqrt(ss / static_cast<double>(std::max<std::size_t>(m, 1)));
 }
 
+namespace {
+
+// The keys of a calibration file, in the file's order: its values, then its sections.
+const Field<Reference> kReferenceKeys[] = {{"image_width", &Reference::image_width},
+                                           {"image_height", &Reference::image_height},
+                                           {"camera_id", &Reference::camera_id},
+                                           {"region_width", &Reference::region_width},
+                                           {"max_region_width", &Reference::max_region_width},
+                                           {"profile_width", &Reference::profile_width},
+                                           {"smoothing_rms", &Reference::smoothing_rms},
+                                           {"full_scale", &Reference::full_scale}};
+constexpr const char* kScale = "scale";
+constexpr const char* kLens = "lens";    // absent: a pinhole
+constexpr const char* kSlits = "slits";  // a list, each with kSlitKeys
+const Field<MetricScale> kScaleKeys[] = {{"source", &MetricScale::source},
+                                         {"f", &MetricScale::f},
+                                         {"cx", &MetricScale::cx},
+                                         {"cy", &MetricScale::cy},
+                                         {"disparity_constant", &MetricScale::disparity_constant}};
+// The lens section: a Lens's intrinsics and distortion.
+struct LensEntries {
+  double f = 1, cx = 0, cy = 0;
+  LensDistortion distortion;
+};
+const Field<LensEntries> kLensKeys[] = {{"f", &LensEntries::f},
+                                        {"cx", &LensEntries::cx},
+                                        {"cy", &LensEntries::cy},
+                                        {"distortion", &LensEntries::distortion}};
+const Field<ReferenceSlit> kSlitKeys[] = {{"first_row", &ReferenceSlit::first_row},
+                                          {"u", &ReferenceSlit::u},
+                                          {"u_inf", &ReferenceSlit::u_inf}};
+
+// The lens section of a calibration file (absent: a pinhole).
+Lens readLens(const cv::FileNode& node) {
+  checkKeys(node, kLens, keysOf(kLensKeys));
+  LensEntries l;
+  readFields(node, kLensKeys, l);
+  return Lens(l.f, l.cx, l.cy, l.distortion);
+}
+
+}  // namespace
+
 void Reference::save(const std::string& path) const {
   validate();  // never a file that load() would refuse
   cv::FileStorage fs = openYamlForWrite(path, "calibration");
-  fs << "image_width" << image_width << "image_height" << image_height;
-  fs << "camera_id" << camera_id;
-  fs << "region_width" << region_width << "max_region_width" << max_region_width;
-  fs << "profile_width" << profile_width << "smoothing_rms" << smoothing_rms;
-  fs << "full_scale" << full_scale;
-  fs << "scale"
-     << "{"
-     << "source" << scale.source << "f" << scale.f << "cx" << scale.cx << "cy" << scale.cy
-     << "disparity_constant" << scale.disparity_constant << "}";
+  writeFields(fs, kReferenceKeys, *this);
+  fs << kScale << "{";
+  writeFields(fs, kScaleKeys, scale);
+  fs << "}";
   if (lens.distorted()) {  // a pinhole's file stays as it was
-    const LensDistortion& d = lens.distortion();
-    fs << "lens"
-       << "{"
-       << "f" << lens.f() << "cx" << lens.cx() << "cy" << lens.cy();
-    for (const auto& [key, field] : kDistortionKeys) fs << key << d.*field;
+    fs << kLens << "{";
+    writeFields(fs, kLensKeys, LensEntries{lens.f(), lens.cx(), lens.cy(), lens.distortion()});
     fs << "}";
   }
-  fs << "slits"
-     << "[";
+  fs << kSlits << "[";
   for (const ReferenceSlit& s : slits) {
-    fs << "{"
-       << "first_row" << s.first_row << "u" << s.u;
-    if (!s.u_inf.empty()) fs << "u_inf" << s.u_inf;
+    fs << "{";
+    writeFields(fs, kSlitKeys, s);
     fs << "}";
   }
   fs << "]";
 }
-
-namespace {
-
-// The lens section of a calibration file (absent: a pinhole).
-Lens readLens(const cv::FileNode& node) {
-  checkKeys(node, "lens", {"f", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
-  double f = 1, cx = 0, cy = 0;
-  LensDistortion d;
-  readField(node, "f", f);
-  readField(node, "cx", cx);
-  readField(node, "cy", cy);
-  for (const auto& [key, field] : kDistortionKeys) readField(node, key, d.*field);
-  return Lens(f, cx, cy, d);
-}
-
-}  // namespace
 
 Reference Reference::load(const std::string& path) {
   cv::FileStorage fs = openYamlForRead(path, "calibration");
   Reference ref;
   try {
     const cv::FileNode root = fs.root();
-    checkKeys(root, "",
-              {"image_width", "image_height", "camera_id", "region_width", "max_region_width",
-               "profile_width", "smoothing_rms", "full_scale", "scale", "lens", "slits"});
-    checkKeys(fs["scale"], "scale", {"source", "f", "cx", "cy", "disparity_constant"});
-    ref.lens = readLens(fs["lens"]);
-    readField(root, "image_width", ref.image_width);
-    readField(root, "image_height", ref.image_height);
-    readField(root, "camera_id", ref.camera_id);
-    readField(root, "region_width", ref.region_width);
-    readField(root, "max_region_width", ref.max_region_width);
-    readField(root, "profile_width", ref.profile_width);
-    readField(root, "smoothing_rms", ref.smoothing_rms);
-    readField(root, "full_scale", ref.full_scale);
-    const cv::FileNode sc = fs["scale"];
-    readField(sc, "source", ref.scale.source);
-    readField(sc, "f", ref.scale.f);
-    readField(sc, "cx", ref.scale.cx);
-    readField(sc, "cy", ref.scale.cy);
-    readField(sc, "disparity_constant", ref.scale.disparity_constant);
-    const cv::FileNode list = fs["slits"];
+    std::vector<std::string> known = keysOf(kReferenceKeys);
+    known.insert(known.end(), {kScale, kLens, kSlits});
+    checkKeys(root, "", known);
+    checkKeys(fs[kScale], kScale, keysOf(kScaleKeys));
+    ref.lens = readLens(fs[kLens]);
+    readFields(root, kReferenceKeys, ref);
+    readFields(fs[kScale], kScaleKeys, ref.scale);
+    const cv::FileNode list = fs[kSlits];
     if (!list.isSeq() || list.size() == 0)
       throw std::invalid_argument("'slits' must be a non-empty list");
     for (const cv::FileNode& n : list) {
-      checkKeys(n, "slits[" + std::to_string(ref.slits.size()) + "]", {"first_row", "u", "u_inf"});
+      checkKeys(n, std::string(kSlits) + "[" + std::to_string(ref.slits.size()) + "]",
+                keysOf(kSlitKeys));
       ReferenceSlit s;
-      readField(n, "first_row", s.first_row);
-      n["u"] >> s.u;
-      if (!n["u_inf"].empty()) n["u_inf"] >> s.u_inf;
+      readFields(n, kSlitKeys, s);
       ref.slits.push_back(std::move(s));
     }
     ref.validate();

@@ -4,11 +4,13 @@
 
 #include "avx2_clones.h"
 #include "config_check.h"
-#include "yaml_io.h"
+#include "yaml_fields.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace multislit {
 
@@ -53,29 +55,33 @@ void SensorConfig::validate() const {
 
 namespace {
 
-// Every key of the three sections into `s` (absent keys keep their defaults).
-void readSections(const cv::FileStorage& fs, SensorConfig& s) {
-  const cv::FileNode c = fs["camera"];
-  readField(c, "width", s.camera.width);
-  readField(c, "height", s.camera.height);
-  readField(c, "pixel_size", s.camera.pixel_size);
-  readField(c, "focal_length", s.camera.focal_length);
-  readField(c, "principal_x", s.camera.principal_x);
-  readField(c, "principal_y", s.camera.principal_y);
-  for (const auto& [key, field] : kDistortionKeys) readField(c, key, s.camera.distortion.*field);
-  const cv::FileNode p = fs["projector"];
-  readField(p, "slit_count", s.projector.slit_count);
-  readField(p, "slit_spacing", s.projector.slit_spacing);
-  readField(p, "slit_half_length", s.projector.slit_half_length);
-  readField(p, "curvature", s.projector.curvature);
-  readField(p, "sheet_sigma", s.projector.sheet_sigma);
-  readField(p, "baseline", s.projector.baseline);
-  readField(p, "rotation", s.projector.rotation);
-  const cv::FileNode m = fs["mount"];
-  readField(m, "tilt", s.mount.tilt);
-  readField(m, "roll", s.mount.roll);
-  readField(m, "height", s.mount.height);
-  readField(m, "forward", s.mount.forward);
+// The keys of each section of a sensor file, in the file's order.
+const Field<CameraConfig> kCameraKeys[] = {{"width", &CameraConfig::width},
+                                           {"height", &CameraConfig::height},
+                                           {"pixel_size", &CameraConfig::pixel_size},
+                                           {"focal_length", &CameraConfig::focal_length},
+                                           {"principal_x", &CameraConfig::principal_x},
+                                           {"principal_y", &CameraConfig::principal_y},
+                                           {"distortion", &CameraConfig::distortion}};
+const Field<ProjectorConfig> kProjectorKeys[] = {
+    {"slit_count", &ProjectorConfig::slit_count},
+    {"slit_spacing", &ProjectorConfig::slit_spacing},
+    {"slit_half_length", &ProjectorConfig::slit_half_length},
+    {"curvature", &ProjectorConfig::curvature},
+    {"sheet_sigma", &ProjectorConfig::sheet_sigma},
+    {"baseline", &ProjectorConfig::baseline},
+    {"rotation", &ProjectorConfig::rotation}};
+const Field<MountConfig> kMountKeys[] = {{"tilt", &MountConfig::tilt},
+                                         {"roll", &MountConfig::roll},
+                                         {"height", &MountConfig::height},
+                                         {"forward", &MountConfig::forward}};
+
+// visit(name, keys, section) for the sections of a sensor file, in the file's order.
+template <typename Sensor, typename Visit>
+void forEachSection(Sensor& s, Visit&& visit) {
+  visit("camera", kCameraKeys, s.camera);
+  visit("projector", kProjectorKeys, s.projector);
+  visit("mount", kMountKeys, s.mount);
 }
 
 }  // namespace
@@ -84,15 +90,15 @@ SensorConfig SensorConfig::load(const std::string& path) {
   cv::FileStorage fs = openYamlForRead(path, "sensor config");
   SensorConfig s;
   try {
-    checkKeys(fs.root(), "", {"camera", "projector", "mount"});
-    checkKeys(fs["camera"], "camera",
-              {"width", "height", "pixel_size", "focal_length", "principal_x", "principal_y", "k1",
-               "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
-    checkKeys(fs["projector"], "projector",
-              {"slit_count", "slit_spacing", "slit_half_length", "curvature", "sheet_sigma",
-               "baseline", "rotation"});
-    checkKeys(fs["mount"], "mount", {"tilt", "roll", "height", "forward"});
-    readSections(fs, s);
+    std::vector<std::string> sections;
+    forEachSection(s, [&](const char* name, const auto&, auto&) { sections.push_back(name); });
+    checkKeys(fs.root(), "", sections);
+    forEachSection(s, [&](const char* name, const auto& keys, auto&) {
+      checkKeys(fs[name], name, keysOf(keys));
+    });
+    forEachSection(s, [&](const char* name, const auto& keys, auto& section) {
+      readFields(fs[name], keys, section);
+    });
     s.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());
@@ -102,27 +108,11 @@ SensorConfig SensorConfig::load(const std::string& path) {
 
 void SensorConfig::save(const std::string& path) const {
   cv::FileStorage fs = openYamlForWrite(path, "sensor config");
-  fs << "camera"
-     << "{";
-  fs << "width" << camera.width << "height" << camera.height;
-  fs << "pixel_size" << camera.pixel_size << "focal_length" << camera.focal_length;
-  fs << "principal_x" << camera.principal_x << "principal_y" << camera.principal_y;
-  if (camera.distortion.any()) {  // a pinhole's file stays as it was
-    for (const auto& [key, field] : kDistortionKeys) fs << key << camera.distortion.*field;
-  }
-  fs << "}";
-  fs << "projector"
-     << "{";
-  fs << "slit_count" << projector.slit_count << "slit_spacing" << projector.slit_spacing;
-  fs << "slit_half_length" << projector.slit_half_length;
-  fs << "curvature" << projector.curvature << "sheet_sigma" << projector.sheet_sigma;
-  fs << "baseline" << projector.baseline << "rotation" << projector.rotation;
-  fs << "}";
-  fs << "mount"
-     << "{";
-  fs << "tilt" << mount.tilt << "roll" << mount.roll << "height" << mount.height;
-  fs << "forward" << mount.forward;
-  fs << "}";
+  forEachSection(*this, [&](const char* name, const auto& keys, const auto& section) {
+    fs << name << "{";
+    writeFields(fs, keys, section);
+    fs << "}";
+  });
 }
 
 SensorGeometry::SensorGeometry(const SensorConfig& config) : config_(config) {

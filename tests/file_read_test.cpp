@@ -1,4 +1,4 @@
-// Reading an input file whole (src/file_read.h): bounded, never blocking on a FIFO.
+// Reading an input file whole (src/internal/file_read.h): bounded, never blocking on a FIFO.
 #include "file_read.h"
 
 #include <gtest/gtest.h>

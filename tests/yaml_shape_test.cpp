@@ -1,5 +1,5 @@
-// The check of a config file before OpenCV's YAML parser sees it (src/yaml_shape.h): nesting
-// counted as the parser nests, quotes as the parser reads them, integers it would wrap.
+// The check of a config file before OpenCV's YAML parser sees it (src/internal/yaml_shape.h):
+// nesting counted as the parser nests, quotes as the parser reads them, integers it would wrap.
 #include "yaml_shape.h"
 
 #include <gtest/gtest.h>

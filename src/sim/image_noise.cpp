@@ -1,9 +1,9 @@
 // The noise of the rendered image: laser speckle and the camera's shot and read noise.
-#include "sim/image_noise.h"
+#include "image_noise.h"
 
 #include "avx2_clones.h"
-#include "sim/normal_rows.h"
-#include "sim/parallel_rows.h"
+#include "normal_rows.h"
+#include "parallel_rows.h"
 
 #include <boost/math/special_functions/gamma.hpp>
 #include <opencv2/core.hpp>

@@ -1,6 +1,6 @@
-#include "sim/laser_integral.h"
+#include "laser_integral.h"
 
-#include "sim/parallel_rows.h"
+#include "parallel_rows.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,8 +2,8 @@
 // render, after the pixel centres.
 #pragma once
 
-#include "sim/pixel_centres.h"
-#include "sim/shader.h"
+#include "pixel_centres.h"
+#include "shader.h"
 
 #include "multislit/sim/scene.h"
 

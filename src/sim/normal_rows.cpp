@@ -1,4 +1,4 @@
-#include "sim/normal_rows.h"
+#include "normal_rows.h"
 
 #include "avx2_clones.h"
 

@@ -1,4 +1,4 @@
-#include "sim/object_bounds.h"
+#include "object_bounds.h"
 
 #include <algorithm>
 #include <cmath>

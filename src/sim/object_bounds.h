@@ -2,7 +2,7 @@
 // trace objects only on the pixels they may cover and test shadows only where they may fall.
 #pragma once
 
-#include "sim/shader.h"
+#include "shader.h"
 
 #include <vector>
 

@@ -1,6 +1,6 @@
 #include "multislit/sim/photometry.h"
 
-#include "yaml_io.h"
+#include "yaml_fields.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,6 +10,7 @@
 #include <map>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace multislit {
 namespace {
@@ -261,37 +262,6 @@ RenderConfig applyPhotometry(const Photometry& photometry, Scene& scene) {
 
 namespace {
 
-// The numeric fields of a photometry by YAML key: one table for saving and loading.
-struct Fields {
-  std::vector<std::pair<const char*, double*>> reals;
-  std::vector<std::pair<const char*, int*>> integers;
-};
-
-Fields fieldsOf(Photometry& p) {
-  RenderConfig& r = p.render;
-  FloorConfig& f = p.floor;
-  return {{{"laser_peak", &r.laser_peak},
-           {"ambient", &r.ambient},
-           {"speckle_contrast", &r.speckle_contrast},
-           {"speckle_grain", &r.speckle_grain},
-           {"blur_sigma", &r.blur_sigma},
-           {"full_well", &r.full_well},
-           {"read_noise", &r.read_noise},
-           {"stripe_width", &r.stripe_width},
-           {"gamma", &r.gamma},
-           {"floor_albedo", &f.albedo},
-           {"floor_texture_amplitude", &f.texture_amplitude},
-           {"floor_texture_scale", &f.texture_scale},
-           {"floor_grout_width", &f.grout_width},
-           {"floor_grout_albedo", &f.grout_albedo},
-           {"floor_laser_albedo", &f.laser_albedo},
-           {"floor_gloss", &f.gloss},
-           {"floor_stripe_width", &f.stripe_width},
-           {"object_albedo", &p.object_albedo},
-           {"object_stripe_width", &p.object_stripe_width}},
-          {{"bit_depth", &r.bit_depth}, {"supersample", &r.supersample}}};
-}
-
 // The seed is written as a string: a 64-bit value does not fit OpenCV's int.
 uint64_t parseSeed(const std::string& text) {
   std::size_t end = 0;
@@ -307,10 +277,43 @@ uint64_t parseSeed(const std::string& text) {
   return seed;
 }
 
+// The keys of a photometry file's numbers, in the file's order after the keys that are converted
+// by hand (name, speckle_model, noise, seed, floor_texture, floor_texture_seed).
+const Field<RenderConfig> kRenderKeys[] = {{"laser_peak", &RenderConfig::laser_peak},
+                                           {"ambient", &RenderConfig::ambient},
+                                           {"speckle_contrast", &RenderConfig::speckle_contrast},
+                                           {"speckle_grain", &RenderConfig::speckle_grain},
+                                           {"blur_sigma", &RenderConfig::blur_sigma},
+                                           {"full_well", &RenderConfig::full_well},
+                                           {"read_noise", &RenderConfig::read_noise},
+                                           {"stripe_width", &RenderConfig::stripe_width},
+                                           {"gamma", &RenderConfig::gamma}};
+const Field<FloorConfig> kFloorKeys[] = {
+    {"floor_albedo", &FloorConfig::albedo},
+    {"floor_texture_amplitude", &FloorConfig::texture_amplitude},
+    {"floor_texture_scale", &FloorConfig::texture_scale},
+    {"floor_grout_width", &FloorConfig::grout_width},
+    {"floor_grout_albedo", &FloorConfig::grout_albedo},
+    {"floor_laser_albedo", &FloorConfig::laser_albedo},
+    {"floor_gloss", &FloorConfig::gloss},
+    {"floor_stripe_width", &FloorConfig::stripe_width}};
+const Field<Photometry> kObjectKeys[] = {{"object_albedo", &Photometry::object_albedo},
+                                         {"object_stripe_width", &Photometry::object_stripe_width}};
+const Field<RenderConfig> kSamplingKeys[] = {{"bit_depth", &RenderConfig::bit_depth},
+                                             {"supersample", &RenderConfig::supersample}};
+
+// visit(keys, part) for the tables of a photometry file's numbers, in the file's order.
+template <typename P, typename Visit>
+void forEachTable(P& p, Visit&& visit) {
+  visit(kRenderKeys, p.render);
+  visit(kFloorKeys, p.floor);
+  visit(kObjectKeys, p);
+  visit(kSamplingKeys, p.render);
+}
+
 }  // namespace
 
-void savePhotometry(const Photometry& photometry, const std::string& path) {
-  Photometry p = photometry;
+void savePhotometry(const Photometry& p, const std::string& path) {
   cv::FileStorage fs = openYamlForWrite(path, "photometry");
   fs << "name" << p.name;
   fs << "speckle_model" << (p.render.speckle_model == SpeckleModel::Gamma ? "gamma" : "gaussian");
@@ -318,9 +321,7 @@ void savePhotometry(const Photometry& photometry, const std::string& path) {
   fs << "seed" << std::to_string(p.render.seed);
   fs << "floor_texture" << floorTextureName(p.floor.texture);
   fs << "floor_texture_seed" << static_cast<double>(p.floor.texture_seed);
-  const Fields fields = fieldsOf(p);
-  for (const auto& [key, value] : fields.reals) fs << key << *value;
-  for (const auto& [key, value] : fields.integers) fs << key << *value;
+  forEachTable(p, [&](const auto& keys, const auto& part) { writeFields(fs, keys, part); });
 }
 
 Photometry loadPhotometry(const std::string& path) {
@@ -330,9 +331,9 @@ Photometry loadPhotometry(const std::string& path) {
   try {
     std::vector<std::string> known = {"name", "speckle_model", "noise",
                                       "seed", "floor_texture", "floor_texture_seed"};
-    Fields fields = fieldsOf(p);
-    for (const auto& field : fields.reals) known.push_back(field.first);
-    for (const auto& field : fields.integers) known.push_back(field.first);
+    forEachTable(p, [&](const auto& keys, auto&) {
+      for (std::string& key : keysOf(keys)) known.push_back(std::move(key));
+    });
     checkKeys(root, "", known);
     readField(root, "name", p.name);
     std::string model = "gaussian", texture = floorTextureName(p.floor.texture);
@@ -350,8 +351,7 @@ Photometry loadPhotometry(const std::string& path) {
     readField(root, "floor_texture", texture);
     p.floor.texture = floorTextureFromName(texture);
     readField(root, "floor_texture_seed", p.floor.texture_seed);
-    for (const auto& [key, value] : fields.reals) readField(root, key, *value);
-    for (const auto& [key, value] : fields.integers) readField(root, key, *value);
+    forEachTable(p, [&](const auto& keys, auto& part) { readFields(root, keys, part); });
     p.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());

@@ -1,7 +1,7 @@
-#include "sim/pixel_centres.h"
+#include "pixel_centres.h"
 
-#include "sim/object_bounds.h"
-#include "sim/parallel_rows.h"
+#include "object_bounds.h"
+#include "parallel_rows.h"
 
 #include "avx2_clones.h"
 

@@ -1,7 +1,7 @@
 // The samples of every pixel centre (private to the simulator): the first step of a render.
 #pragma once
 
-#include "sim/shader.h"
+#include "shader.h"
 
 #include <opencv2/core/mat.hpp>
 

@@ -1,4 +1,4 @@
-#include "sim/render_buffers.h"
+#include "render_buffers.h"
 
 namespace multislit {
 

@@ -2,7 +2,7 @@
 // fresh pages cost more than filling them (page faults took 9 % of a render).
 #pragma once
 
-#include "sim/pixel_centres.h"
+#include "pixel_centres.h"
 
 #include <opencv2/core/mat.hpp>
 

@@ -1,53 +1,96 @@
 // A scene's YAML file (Scene::load, Scene::save) and the names of its shapes and floor textures.
 #include "multislit/sim/scene.h"
 
-#include "yaml_io.h"
+#include "yaml_fields.h"
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace multislit {
 namespace {
 
-Eigen::Vector3d readVec3(const cv::FileNode& node, const char* key,
-                         const Eigen::Vector3d& fallback) {
-  const cv::FileNode n = node[key];
-  if (n.empty()) return fallback;
-  const auto number = [&](int i) {
-    if (!n[i].isInt() && !n[i].isReal())
-      throw std::invalid_argument(std::string("field '") + key + "' must be a list of 3 numbers");
-    return static_cast<double>(n[i]);
-  };
-  if (!n.isSeq() || n.size() != 3)
-    throw std::invalid_argument(std::string("field '") + key + "' must be a list of 3 numbers");
-  return Eigen::Vector3d(number(0), number(1), number(2));
+void readTexture(const cv::FileNode& node, const char* key, FloorConfig& floor) {
+  std::string name = floorTextureName(floor.texture);
+  readField(node, key, name);
+  floor.texture = floorTextureFromName(name);
 }
 
-// The keys an object of each type may have (a key of another type would be ignored).
-void checkObjectKeys(const cv::FileNode& n, const std::string& where, const std::string& type) {
-  if (type == "sphere")
-    checkKeys(n, where, {"type", "name", "centre", "radius", "albedo", "stripe_width"});
-  else if (type == "cylinder")
-    checkKeys(n, where,
-              {"type", "name", "axis_start", "axis_end", "radius", "albedo", "stripe_width"});
-  else if (type == "box")
-    checkKeys(n, where, {"type", "name", "centre", "size", "yaw", "albedo", "stripe_width"});
+void writeTexture(cv::FileStorage& fs, const char* key, const FloorConfig& floor) {
+  fs << key << floorTextureName(floor.texture);
 }
 
-void writeVec3(cv::FileStorage& fs, const char* key, const Eigen::Vector3d& v) {
-  fs << key << "[:" << v.x() << v.y() << v.z() << "]";
+// The keys of a scene file: the floor's, then each object's: its type, name, shape and surface.
+constexpr const char* kFloor = "floor";
+constexpr const char* kObjects = "objects";
+const Field<FloorConfig> kFloorKeys[] = {{"texture", Codec<FloorConfig>{readTexture, writeTexture}},
+                                         {"albedo", &FloorConfig::albedo},
+                                         {"texture_amplitude", &FloorConfig::texture_amplitude},
+                                         {"texture_scale", &FloorConfig::texture_scale},
+                                         {"texture_seed", &FloorConfig::texture_seed},
+                                         {"grout_width", &FloorConfig::grout_width},
+                                         {"grout_albedo", &FloorConfig::grout_albedo},
+                                         {"laser_albedo", &FloorConfig::laser_albedo},
+                                         {"gloss", &FloorConfig::gloss},
+                                         {"stripe_width", &FloorConfig::stripe_width}};
+constexpr const char* kType = "type";
+const Field<SceneObject> kNameKey[] = {{"name", &SceneObject::name}};
+const Field<SceneObject> kSurfaceKeys[] = {{"albedo", &SceneObject::albedo},
+                                           {"stripe_width", &SceneObject::stripe_width}};
+struct Shape {
+  const char* name;
+  ShapeType type;
+  std::vector<Field<SceneObject>> keys;
+};
+const Shape kShapes[] = {
+    {"sphere",
+     ShapeType::Sphere,
+     {{"centre", &SceneObject::centre}, {"radius", &SceneObject::radius}}},
+    {"cylinder",
+     ShapeType::Cylinder,
+     {{"axis_start", &SceneObject::axis_start},
+      {"axis_end", &SceneObject::axis_end},
+      {"radius", &SceneObject::radius}}},
+    {"box",
+     ShapeType::Box,
+     {{"centre", &SceneObject::centre}, {"size", &SceneObject::size}, {"yaw", &SceneObject::yaw}}}};
+
+const Shape* shapeNamed(const std::string& name) {
+  for (const Shape& shape : kShapes)
+    if (name == shape.name) return &shape;
+  return nullptr;
 }
 
-const char* shapeName(ShapeType t) {
-  switch (t) {
-    case ShapeType::Sphere:
-      return "sphere";
-    case ShapeType::Cylinder:
-      return "cylinder";
-    case ShapeType::Box:
-      return "box";
+const Shape& shapeOf(ShapeType type) {
+  for (const Shape& shape : kShapes)
+    if (type == shape.type) return shape;
+  throw std::logic_error("a shape without a name");
+}
+
+// One entry of the list of objects; `index` is its place in the list. A key of another shape is
+// an error: it would be ignored.
+SceneObject readObject(const cv::FileNode& n, std::size_t index) {
+  const std::string where = std::string(kObjects) + "[" + std::to_string(index) + "]";
+  if (!n.isMap()) throw std::invalid_argument("'" + where + "' must be a map of keys");
+  std::string type;
+  readField(n, kType, type);
+  const Shape* shape = shapeNamed(type);
+  if (shape != nullptr) {
+    std::vector<std::string> known = keysOf(kNameKey, shape->keys, kSurfaceKeys);
+    known.insert(known.begin(), kType);
+    checkKeys(n, where, known);
   }
-  return "?";
+  SceneObject o;
+  readFields(n, kNameKey, o);
+  if (o.name.empty()) o.name = type + std::to_string(index);
+  if (shape == nullptr)
+    throw std::invalid_argument("object '" + o.name +
+                                "': type must be sphere, cylinder or box, not '" + type + "'");
+  o.type = shape->type;
+  readFields(n, shape->keys, o);
+  readFields(n, kSurfaceKeys, o);
+  if (o.type == ShapeType::Cylinder) o.centre = 0.5 * (o.axis_start + o.axis_end);
+  return o;
 }
 
 }  // namespace
@@ -74,55 +117,16 @@ Scene Scene::load(const std::string& path) {
   cv::FileStorage fs = openYamlForRead(path, "scene");
   Scene scene;
   try {
-    checkKeys(fs.root(), "", {"floor", "objects"});
-    const cv::FileNode f = fs["floor"];
-    checkKeys(f, "floor",
-              {"texture", "albedo", "texture_amplitude", "texture_scale", "texture_seed",
-               "grout_width", "grout_albedo", "laser_albedo", "gloss", "stripe_width"});
-    std::string texture = floorTextureName(scene.floor.texture);
-    readField(f, "texture", texture);
-    scene.floor.texture = floorTextureFromName(texture);
-    readField(f, "albedo", scene.floor.albedo);
-    readField(f, "texture_amplitude", scene.floor.texture_amplitude);
-    readField(f, "texture_scale", scene.floor.texture_scale);
-    readField(f, "texture_seed", scene.floor.texture_seed);
-    readField(f, "grout_width", scene.floor.grout_width);
-    readField(f, "grout_albedo", scene.floor.grout_albedo);
-    readField(f, "laser_albedo", scene.floor.laser_albedo);
-    readField(f, "gloss", scene.floor.gloss);
-    readField(f, "stripe_width", scene.floor.stripe_width);
-    const cv::FileNode list = fs["objects"];
+    checkKeys(fs.root(), "", {kFloor, kObjects});
+    checkKeys(fs[kFloor], kFloor, keysOf(kFloorKeys));
+    readFields(fs[kFloor], kFloorKeys, scene.floor);
+    const cv::FileNode list = fs[kObjects];
     if (!list.empty() && !list.isSeq()) throw std::invalid_argument("'objects' must be a list");
     if (list.size() > kMaxObjects)
       throw std::invalid_argument(std::to_string(list.size()) +
                                   " objects, more than the limit of " +
                                   std::to_string(kMaxObjects));
-    for (const cv::FileNode& n : list) {
-      const std::string where = "objects[" + std::to_string(scene.objects.size()) + "]";
-      if (!n.isMap()) throw std::invalid_argument("'" + where + "' must be a map of keys");
-      std::string type;
-      readField(n, "type", type);
-      checkObjectKeys(n, where, type);
-      SceneObject o;
-      readField(n, "name", o.name);
-      if (o.name.empty()) o.name = type + std::to_string(scene.objects.size());
-      if (type == "sphere") {
-        o = SceneObject::sphere(o.name, readVec3(n, "centre", o.centre), 0.0);
-      } else if (type == "cylinder") {
-        o = SceneObject::cylinder(o.name, readVec3(n, "axis_start", o.axis_start),
-                                  readVec3(n, "axis_end", o.axis_end), 0.0);
-      } else if (type == "box") {
-        o = SceneObject::box(o.name, readVec3(n, "centre", o.centre), readVec3(n, "size", o.size));
-        readField(n, "yaw", o.yaw);
-      } else {
-        throw std::invalid_argument("object '" + o.name +
-                                    "': type must be sphere, cylinder or box, not '" + type + "'");
-      }
-      readField(n, "radius", o.radius);
-      readField(n, "albedo", o.albedo);
-      readField(n, "stripe_width", o.stripe_width);
-      scene.objects.push_back(o);
-    }
+    for (const cv::FileNode& n : list) scene.objects.push_back(readObject(n, scene.objects.size()));
     scene.validate();
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());
@@ -132,34 +136,17 @@ Scene Scene::load(const std::string& path) {
 
 void Scene::save(const std::string& path) const {
   cv::FileStorage fs = openYamlForWrite(path, "scene");
-  fs << "floor"
-     << "{";
-  fs << "texture" << floorTextureName(floor.texture);
-  fs << "albedo" << floor.albedo << "texture_amplitude" << floor.texture_amplitude;
-  fs << "texture_scale" << floor.texture_scale << "texture_seed"
-     << static_cast<double>(floor.texture_seed);
-  fs << "grout_width" << floor.grout_width << "grout_albedo" << floor.grout_albedo;
-  fs << "laser_albedo" << floor.laser_albedo << "gloss" << floor.gloss;
-  fs << "stripe_width" << floor.stripe_width;
+  fs << kFloor << "{";
+  writeFields(fs, kFloorKeys, floor);
   fs << "}";
-  fs << "objects"
-     << "[";
+  fs << kObjects << "[";
   for (const SceneObject& o : objects) {
-    fs << "{"
-       << "type" << shapeName(o.type) << "name" << o.name;
-    if (o.type == ShapeType::Cylinder) {
-      writeVec3(fs, "axis_start", o.axis_start);
-      writeVec3(fs, "axis_end", o.axis_end);
-    } else {
-      writeVec3(fs, "centre", o.centre);
-    }
-    if (o.type == ShapeType::Box) {
-      writeVec3(fs, "size", o.size);
-      fs << "yaw" << o.yaw;
-    } else {
-      fs << "radius" << o.radius;
-    }
-    fs << "albedo" << o.albedo << "stripe_width" << o.stripe_width << "}";
+    const Shape& shape = shapeOf(o.type);
+    fs << "{" << kType << shape.name;
+    writeFields(fs, kNameKey, o);
+    writeFields(fs, shape.keys, o);
+    writeFields(fs, kSurfaceKeys, o);
+    fs << "}";
   }
   fs << "]";
 }

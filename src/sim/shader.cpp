@@ -1,4 +1,4 @@
-#include "sim/shader.h"
+#include "shader.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,12 +1,12 @@
 #include "multislit/sim/simulator.h"
 
-#include "sim/image_noise.h"
-#include "sim/laser_integral.h"
-#include "sim/object_bounds.h"
-#include "sim/parallel_rows.h"
-#include "sim/pixel_centres.h"
-#include "sim/render_buffers.h"
-#include "sim/shader.h"
+#include "image_noise.h"
+#include "laser_integral.h"
+#include "object_bounds.h"
+#include "parallel_rows.h"
+#include "pixel_centres.h"
+#include "render_buffers.h"
+#include "shader.h"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
