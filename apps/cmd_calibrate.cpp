@@ -71,12 +71,10 @@ void printCalibration(const Reference& ref, const std::string& ref_path, std::si
 }
 
 // Every file calibrate reads: the reference images, the plane images and the sensor file.
-std::vector<std::string> inputsOf(const cli::ArgParser& args) {
-  std::vector<std::string> inputs = args.list("reference");
+std::vector<NamedInput> calibrateInputs(const cli::ArgParser& args) {
+  std::vector<NamedInput> inputs = inputsOf(args, {"reference", "sensor", "intrinsics"});
   for (const std::string& plane : args.list("plane"))
-    inputs.push_back(plane.substr(plane.find(':') + 1));
-  inputs.push_back(args.str("sensor"));
-  inputs.push_back(args.str("intrinsics"));
+    inputs.push_back({"--plane", plane.substr(plane.find(':') + 1)});
   return inputs;
 }
 
@@ -113,7 +111,7 @@ int runCalibrate(int argc, char** argv) {
       "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
       "bend more than the projector model allows. Several --reference images of the same\n"
       "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
-      "one frame join.\n"
+      "one frame join. Ctrl-C ends it with nothing written (rc 130).\n"
       "\n"
       "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
       "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
@@ -140,11 +138,15 @@ int runCalibrate(int argc, char** argv) {
   const std::vector<std::string> ref_paths = args.list("reference");
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
-  refuseOverwritingInputs(args.str("out"), inputsOf(args));
+  refuseOverwritingInputs(args.str("out"), calibrateInputs(args));
+  const StopSignal stop;  // Ctrl-C: nothing is written, as for a calibration that failed
   const SensorConfig sensor = sensorFromArgs(args);
   const ReferenceConfig rc = referenceConfigFromArgs(args);
   std::vector<cv::Mat> ref_images;
-  for (const std::string& path : ref_paths) ref_images.push_back(readMonoImage(path));
+  for (const std::string& path : ref_paths) {
+    if (StopSignal::requested()) return interruptedNothingWritten("calibrate");
+    ref_images.push_back(readMonoImage(path));
+  }
   const std::string ref_path =
       ref_paths.front() +
       (ref_paths.size() > 1 ? " (+" + std::to_string(ref_paths.size() - 1) + " averaged)" : "");
@@ -164,6 +166,7 @@ int runCalibrate(int argc, char** argv) {
     const PlaneImages plane_images = readPlanes(planes);
     fit_rms = ref.calibrateWithPlanes(plane_images.images, plane_images.depths, sensor.camera, rc);
   }
+  if (StopSignal::requested()) return interruptedNothingWritten("calibrate");
   writeCalibration(ref, args.str("out"));
 
   printCalibration(ref, ref_path, planes.size(), fit_rms);
