@@ -192,6 +192,12 @@ fuzz_one() {
   mkdir -p "$dir/corpus" "$dir/crashes"
   cp fuzz/corpus/"$name"/* "$dir/corpus/"
   case $name in sensor | calibration | scene) extra=(-dict=fuzz/yaml.dict) ;; esac
+  # Inputs at most the size of the largest seed that must stay whole (calibration/small.yaml,
+  # 42 kB; sensor/crash-keys-on-one-line.yaml, 15 kB). The deep-nesting seeds (242 and 100 kB)
+  # are cut there, still hundreds of times deeper than the limit of 64. Without a cap, inputs
+  # grew to their size: 754 executions a second instead of 2251 (calibration, 300 s), 1M sensor
+  # files in 379 s instead of 104 s.
+  case $name in calibration) extra+=(-max_len=65536) ;; sensor) extra+=(-max_len=16384) ;; esac
   # -timeout: an input running 25 s is a hang; -close_fd_mask=1: the targets' stdout (--help).
   start=$(now)
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \

@@ -98,24 +98,8 @@ void writeCalibration(const Reference& ref, const std::string& path) {
       [](const std::string& tmp) { Reference::load(tmp); });
 }
 
-}  // namespace
-
-int runCalibrate(int argc, char** argv) {
-  cli::ArgParser args(
-      "calibrate",
-      "Finds the slits in a reference image of a plane (Sec. II-C), assigns each reference\n"
-      "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
-      "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
-      "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
-      "axis) it is measured. With --intrinsics the camera's lens distortion is taken off the\n"
-      "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
-      "bend more than the projector model allows. Several --reference images of the same\n"
-      "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
-      "one frame join. Ctrl-C ends it with nothing written (rc 130).\n"
-      "\n"
-      "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
-      "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
-      "    --reference f4.png --reference f5.png --sensor my_sensor.yaml --out calibration.yaml");
+// The options of `multislit calibrate`.
+void addCalibrateOptions(cli::ArgParser& args) {
   args.repeatable("reference",
                   "reference image of a plane (required; repeat to average several); memory: "
                   "about 130 MB and 3 bytes a pixel of one image (125 MB at 1296x964, 340 MB at "
@@ -138,6 +122,27 @@ int runCalibrate(int argc, char** argv) {
               "serial number (or DeviceID) of the camera; another is refused when the calibration "
               "is used with a camera");
   args.option("out", "calibration.yaml", "calibration file to write");
+}
+
+}  // namespace
+
+int runCalibrate(int argc, char** argv) {
+  cli::ArgParser args(
+      "calibrate",
+      "Finds the slits in a reference image of a plane (Sec. II-C), assigns each reference\n"
+      "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
+      "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
+      "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
+      "axis) it is measured. With --intrinsics the camera's lens distortion is taken off the\n"
+      "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
+      "bend more than the projector model allows. Several --reference images of the same\n"
+      "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
+      "one frame join. Ctrl-C ends it with nothing written (rc 130).\n"
+      "\n"
+      "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
+      "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
+      "    --reference f4.png --reference f5.png --sensor my_sensor.yaml --out calibration.yaml");
+  addCalibrateOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const std::vector<std::string> ref_paths = args.list("reference");
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
