@@ -95,10 +95,7 @@ int benchRender(long frames, int passes, const std::string& csv) {
   const std::vector<View> views = walkViews(frames);
   const MethodTimes before = timeMethod("exhaustive", RenderMethod::Exhaustive, views, passes);
   const MethodTimes after = timeMethod("culled", RenderMethod::Culled, views, passes);
-  if (StopSignal::requested()) {
-    std::printf("bench --render: interrupted (Ctrl-C or SIGTERM): nothing written\n");
-    return kInterruptedExit;
-  }
+  if (StopSignal::requested()) return interruptedNothingWritten("bench --render");
   std::printf(
       "multislit bench --render: %zu frames of the walk (floor, ball, cable), 1296x964, %d "
       "passes, %d threads\n",

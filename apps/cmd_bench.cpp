@@ -278,12 +278,6 @@ ScaleResult measure(const BenchInput& in, int passes, double tolerance) {
   return r;
 }
 
-/// Ctrl-C or SIGTERM before the table: said, nothing written.
-int interrupted() {
-  std::printf("bench: interrupted (Ctrl-C or SIGTERM): nothing written\n");
-  return kInterruptedExit;
-}
-
 std::vector<int> parseScales(const std::string& text) {
   std::vector<int> scales;
   std::stringstream list(text);
@@ -332,6 +326,10 @@ int runBench(int argc, char** argv) {
   addBenchOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C: the soak's report so far; else nothing (no table of a part)
+  const std::vector<NamedInput> files =
+      inputsOf(args, {"sequence", "calibration", "reference", "sensor", "intrinsics"});
+  for (const char* output : {"out", "soak-png"})
+    refuseOverwritingInputs(args.str(output), files, std::string("--") + output);
   const std::vector<int> scales = parseScales(args.str("scale"));
   const int passes = args.has("passes")   ? static_cast<int>(args.integer("passes", 1, 100000))
                      : args.has("render") ? 1
@@ -349,7 +347,7 @@ int runBench(int argc, char** argv) {
     inputs.push_back(args.has("sequence")
                          ? readBenchInput(args)
                          : renderBenchInput(args.str("scenario"), frames, step, scale));
-  if (StopSignal::requested()) return interrupted();
+  if (StopSignal::requested()) return interruptedNothingWritten("bench");
   if (soak_frames > 0) {
     const SoakResult r = soak(inputs.front(), static_cast<std::size_t>(soak_frames), 200);
     const int rc = reportSoak(r, 0.1, 0.05, args.str("soak-png"));
@@ -360,7 +358,7 @@ int runBench(int argc, char** argv) {
   std::vector<ScaleResult> results;
   for (const BenchInput& in : inputs) {
     results.push_back(measure(in, passes, tolerance));
-    if (StopSignal::requested()) return interrupted();
+    if (StopSignal::requested()) return interruptedNothingWritten("bench");
   }
 
   std::printf("multislit bench: %s, pinned to CPU %d, %d passes (stock: %d)\n",

@@ -71,12 +71,10 @@ void printCalibration(const Reference& ref, const std::string& ref_path, std::si
 }
 
 // Every file calibrate reads: the reference images, the plane images and the sensor file.
-std::vector<std::string> inputsOf(const cli::ArgParser& args) {
-  std::vector<std::string> inputs = args.list("reference");
+std::vector<NamedInput> calibrateInputs(const cli::ArgParser& args) {
+  std::vector<NamedInput> inputs = inputsOf(args, {"reference", "sensor", "intrinsics"});
   for (const std::string& plane : args.list("plane"))
-    inputs.push_back(plane.substr(plane.find(':') + 1));
-  inputs.push_back(args.str("sensor"));
-  inputs.push_back(args.str("intrinsics"));
+    inputs.push_back({"--plane", plane.substr(plane.find(':') + 1)});
   return inputs;
 }
 
@@ -100,25 +98,13 @@ void writeCalibration(const Reference& ref, const std::string& path) {
       [](const std::string& tmp) { Reference::load(tmp); });
 }
 
-}  // namespace
-
-int runCalibrate(int argc, char** argv) {
-  cli::ArgParser args(
-      "calibrate",
-      "Finds the slits in a reference image of a plane (Sec. II-C), assigns each reference\n"
-      "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
-      "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
-      "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
-      "axis) it is measured. With --intrinsics the camera's lens distortion is taken off the\n"
-      "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
-      "bend more than the projector model allows. Several --reference images of the same\n"
-      "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
-      "one frame join.\n"
-      "\n"
-      "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
-      "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
-      "    --reference f4.png --reference f5.png --sensor my_sensor.yaml --out calibration.yaml");
-  args.repeatable("reference", "reference image of a plane (required; repeat to average several)");
+// The options of `multislit calibrate`.
+void addCalibrateOptions(cli::ArgParser& args) {
+  args.repeatable("reference",
+                  "reference image of a plane (required; repeat to average several); memory: "
+                  "about 130 MB and 3 bytes a pixel of one image (125 MB at 1296x964, 340 MB at "
+                  "8192x8192, 0.96 GB at 16384x16384), averaging 11 bytes a pixel more (1.06 GB "
+                  "for two of 8192x8192)");
   args.option("sensor", "",
               "sensor YAML: camera intrinsics and the reference pose (default: the paper's)");
   addIntrinsicsOption(args);
@@ -136,15 +122,40 @@ int runCalibrate(int argc, char** argv) {
               "serial number (or DeviceID) of the camera; another is refused when the calibration "
               "is used with a camera");
   args.option("out", "calibration.yaml", "calibration file to write");
+}
+
+}  // namespace
+
+int runCalibrate(int argc, char** argv) {
+  cli::ArgParser args(
+      "calibrate",
+      "Finds the slits in a reference image of a plane (Sec. II-C), assigns each reference\n"
+      "point its region (Fig. 7) and stores the metric scale. Without --plane the scale comes\n"
+      "from the sensor model and the reference pose (--sensor, its mount section); with two or\n"
+      "more --plane DEPTH:IMAGE (a wall facing the level sensor, DEPTH metres along the optical\n"
+      "axis) it is measured. With --intrinsics the camera's lens distortion is taken off the\n"
+      "slits' points (stored in the calibration); without it, calibrate warns when the slits\n"
+      "bend more than the projector model allows. Several --reference images of the same\n"
+      "plane from the same pose are averaged first: speckle and noise weaken, slits broken in\n"
+      "one frame join. Ctrl-C ends it with nothing written (rc 130).\n"
+      "\n"
+      "example (a real sensor: 5 frames of the floor, the robot standing still):\n"
+      "  multislit calibrate --reference f1.png --reference f2.png --reference f3.png \\\n"
+      "    --reference f4.png --reference f5.png --sensor my_sensor.yaml --out calibration.yaml");
+  addCalibrateOptions(args);
   if (!args.parse(argc, argv)) return 0;
   const std::vector<std::string> ref_paths = args.list("reference");
   if (ref_paths.empty()) throw cli::UsageError("--reference is required");
 
-  refuseOverwritingInputs(args.str("out"), inputsOf(args));
+  refuseOverwritingInputs(args.str("out"), calibrateInputs(args));
+  const StopSignal stop;  // Ctrl-C: nothing is written, as for a calibration that failed
   const SensorConfig sensor = sensorFromArgs(args);
   const ReferenceConfig rc = referenceConfigFromArgs(args);
   std::vector<cv::Mat> ref_images;
-  for (const std::string& path : ref_paths) ref_images.push_back(readMonoImage(path));
+  for (const std::string& path : ref_paths) {
+    if (StopSignal::requested()) return interruptedNothingWritten("calibrate");
+    ref_images.push_back(readMonoImage(path));
+  }
   const std::string ref_path =
       ref_paths.front() +
       (ref_paths.size() > 1 ? " (+" + std::to_string(ref_paths.size() - 1) + " averaged)" : "");
@@ -164,6 +175,7 @@ int runCalibrate(int argc, char** argv) {
     const PlaneImages plane_images = readPlanes(planes);
     fit_rms = ref.calibrateWithPlanes(plane_images.images, plane_images.depths, sensor.camera, rc);
   }
+  if (StopSignal::requested()) return interruptedNothingWritten("calibrate");
   writeCalibration(ref, args.str("out"));
 
   printCalibration(ref, ref_path, planes.size(), fit_rms);

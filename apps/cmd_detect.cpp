@@ -171,9 +171,9 @@ int runDetect(int argc, char** argv) {
   const bool raw = args.has("raw");
 
   const std::vector<std::string>& frames = args.rest();
-  std::vector<std::string> inputs = frames;
-  for (const char* option : {"calibration", "reference", "sensor", "intrinsics"})
-    inputs.push_back(args.str(option));
+  std::vector<NamedInput> inputs =
+      inputsOf(args, {"calibration", "reference", "sensor", "intrinsics"});
+  for (const std::string& frame : frames) inputs.push_back({"", frame});
   refuseOverwritingInputs(args.str("out"), inputs);
   OutputFile file(args.str("out"));  // whole or absent: a bad frame leaves no partial JSONL
   std::ofstream& out = file.stream();

@@ -48,7 +48,7 @@ void declareMapOptions(cli::ArgParser& args) {
   args.option("frames", "0", "stop after this many frames (0: all, or until Ctrl-C)");
   args.option("fps", defaultText(MapInputOptions{}.fps), "camera frame rate [Hz]");
   addCameraOptions(args);
-  args.option("out", "out/map", "output folder");
+  args.option("out", "out/map", "output folder (not an input's: --sequence's is refused)");
   args.flag("strict",
             "a frame file of a recording that cannot be read is an error (default: "
             "named, counted in summary.txt and skipped)");
@@ -160,6 +160,8 @@ int runMap(int argc, char** argv) {
       "The whole chain on a camera, a recording or the simulator, with the robot's odometry:\n"
       "image -> RDMap -> floor (RANSAC) -> obstacle groups -> OctoMap -> footsteps ->\n"
       "walk / turn / stop. Ctrl-C ends the run at a frame boundary with every file complete.\n"
+      "decisions.csv and obstacles.csv grow a row at a time as decisions.csv.part and\n"
+      "obstacles.csv.part (tail -f follows them) and take their names when the run ends.\n"
       "On a robot, with the sensor calibrated and the odometry logged by the robot:\n"
       "  multislit map --camera 192.168.1.20 --calibration calib.yaml --sensor sensor.yaml \\\n"
       "      --poses odometry.csv --out run1\n"
@@ -169,13 +171,16 @@ int runMap(int argc, char** argv) {
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C and SIGTERM end the run at a frame boundary
   const long max_frames = args.integer("frames", 0, 1000000000);
-  MapInput in = openMapInput(inputOptions(args), openSimulatedInput);
+  const MapInputOptions options = inputOptions(args);
+  MapInput in = openMapInput(options, openSimulatedInput);
   PipelineConfig config;
   config.sensor = in.sensor;
   Pipeline pipeline(config);
   MapPoses poses(poseOptions(args), args.str("sequence"), in, config);
   const Extractor extractor(in.reference);
-  MapRecorder recorder(args.str("out"));
+  std::vector<NamedInput> inputs = inputFiles(options);
+  if (poses.mode() == "file") inputs.push_back({"--poses", args.str("poses")});
+  MapRecorder recorder(args.str("out"), "--out", inputs);
 
   const auto t0 = std::chrono::steady_clock::now();
   const FrameCounts counts = processFrames(*in.source, extractor, poses, pipeline, recorder,

@@ -32,10 +32,8 @@ std::vector<std::filesystem::path> outputTargets(const cli::ArgParser& args, boo
     targets.push_back(target);
   }
   refuseSameOutputTwice(targets, images);
-  std::vector<std::string> inputs = images;
-  inputs.push_back(args.str("calibration"));
-  inputs.push_back(args.str("sensor"));
-  inputs.push_back(args.str("intrinsics"));
+  std::vector<NamedInput> inputs = inputsOf(args, {"calibration", "sensor", "intrinsics"});
+  for (const std::string& image : images) inputs.push_back({"", image});
   for (const auto& target : targets) refuseOverwritingInputs(target, inputs);
   return targets;
 }

@@ -6,6 +6,7 @@
 #include "camera_options.h"
 #include "cli.h"
 #include "commands.h"
+#include "common.h"
 #include "config_options.h"
 #include "output_file.h"
 #include "recording.h"
@@ -145,8 +146,8 @@ int runRecord(int argc, char** argv) {
 
   const StopSignal stop;  // Ctrl-C and SIGTERM end the recording at a frame boundary
   source.start();         // a camera that cannot be opened leaves no file behind
-  SequenceRecorder recording(out, reference ? &*reference : nullptr, sensor,
-                             {args.str("calibration"), args.str("sensor")});
+  SequenceRecorder recording(out, "--out", reference ? &*reference : nullptr, sensor,
+                             inputsOf(args, {"calibration", "sensor"}));
   const RecordCounts counts = recordFrames(source, recording, max_frames, max_seconds);
   source.stop();
   recording.finish();

@@ -219,10 +219,13 @@ int runSimulate(int argc, char** argv) {
   used.validate();  // the sensor.yaml written below is one SensorConfig::load() takes
 
   const std::filesystem::path out = args.str("out");
-  const std::vector<std::string> inputs{args.str("sensor"), args.str("scene"),
-                                        args.str("photometry")};
-  for (const char* name : {"sensor.yaml", "scene.yaml", "photometry.yaml"})
-    refuseOverwritingInputs(out / name, inputs);
+  std::vector<NamedInput> inputs = inputsOf(args, {"sensor", "scene"});
+  if (isPhotometryFile(args.str("photometry")))
+    inputs.push_back({"--photometry", args.str("photometry")});
+  refuseOutputFolder(out, "--out",
+                     {"sensor.yaml", "scene.yaml", "photometry.yaml", "reference.png",
+                      "reference.csv", "frames.csv", "odometry.csv"},
+                     inputs);
   std::filesystem::create_directories(out);
   const Simulator sim(sensor, photometry.render);
   writeWhole(

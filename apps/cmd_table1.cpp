@@ -91,6 +91,8 @@ int runTable1(int argc, char** argv) {
   args.option("out", "out/table1", "output folder");
   if (!args.parse(argc, argv)) return 0;
   const StopSignal stop;  // Ctrl-C: nothing is written (a table of fewer poses is no Table I)
+  const std::filesystem::path out = args.str("out");
+  refuseOutputFolder(out, "--out", {"table1.csv", "fig12.png"}, inputsOf(args, {"sensor"}));
   const long frames = args.integer("frames", 1, 1000000);
   const SensorConfig sensor =
       args.has("sensor") ? SensorConfig::load(args.str("sensor")) : SensorConfig{};
@@ -102,7 +104,6 @@ int runTable1(int argc, char** argv) {
   const Scenario ref_scene = makeScenario("reference");
   const Extractor extractor(renderFloorReference(sensor, ref_scene.reference_mount, rc));
 
-  const std::filesystem::path out = args.str("out");
   std::filesystem::create_directories(out);
   OutputFile csv_file(out / "table1.csv");  // whole or absent
   std::ofstream& csv = csv_file.stream();
@@ -128,10 +129,7 @@ int runTable1(int argc, char** argv) {
     rows.push_back(row);
   }
   progress.finish();
-  if (StopSignal::requested()) {
-    std::printf("table1: interrupted (Ctrl-C or SIGTERM): nothing written\n");
-    return kInterruptedExit;
-  }
+  if (StopSignal::requested()) return interruptedNothingWritten("table1");
   reportTable1(out, csv_file, frames, rows, labels, means, spreads);
   return 0;
 }

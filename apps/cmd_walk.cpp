@@ -14,6 +14,7 @@
 #include "walk_figures.h"
 #include "walk_sweep.h"
 
+#include "multislit/sim/photometry.h"
 #include "multislit/sim/walk.h"
 
 #include <chrono>
@@ -315,6 +316,20 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
   drawTopView((out / "map_top.png").string(), walk.map(), r.top);
 }
 
+/// The files the walk reads (the sensor, a photometry YAML), once --out is known to hold none of
+/// them where it writes.
+std::vector<NamedInput> checkedInputs(const cli::ArgParser& args,
+                                      const std::filesystem::path& out) {
+  std::vector<NamedInput> inputs = inputsOf(args, {"sensor"});
+  if (isPhotometryFile(args.str("photometry")))
+    inputs.push_back({"--photometry", args.str("photometry")});
+  refuseOutputFolder(out, "--out",
+                     {"obstacles.csv", "summary.txt", "map.bt", "map_top.png",
+                      "fig15_obstacle_points.png", "sweep_passes.csv", "sweep_histograms.csv"},
+                     inputs);
+  return inputs;
+}
+
 }  // namespace
 
 int runWalk(int argc, char** argv) {
@@ -330,6 +345,7 @@ int runWalk(int argc, char** argv) {
   const WalkConfig config = configFromArgs(args);
   const long frames = args.integer("frames", 1, 100000000);
   const std::filesystem::path out = args.str("out");
+  const std::vector<NamedInput> inputs = checkedInputs(args, out);
   std::filesystem::create_directories(out);
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -348,8 +364,8 @@ int runWalk(int argc, char** argv) {
   std::optional<SequenceRecorder> recording;
   if (args.has("record")) {
     if (!config.render) throw cli::UsageError("--record needs rendered images, not --synthesize");
-    recording.emplace(args.str("record"), &walk.reference(), config.pipeline.sensor,
-                      std::vector<std::string>{args.str("sensor"), args.str("photometry")});
+    recording.emplace(args.str("record"), "--record", &walk.reference(), config.pipeline.sensor,
+                      inputs);
   }
   cli::Progress progress(static_cast<std::size_t>(frames), "walk");
   for (long k = 0; k < frames && !StopSignal::requested(); ++k) {

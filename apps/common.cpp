@@ -27,6 +27,17 @@ void writeImage(const std::string& path, const cv::Mat& image) {
   file.commit();
 }
 
+std::vector<NamedInput> inputsOf(const cli::ArgParser& args,
+                                 std::initializer_list<const char*> options) {
+  std::vector<NamedInput> inputs;
+  for (const char* option : options) {
+    std::vector<std::string> values = args.list(option);
+    if (values.empty() && args.has(option)) values.push_back(args.str(option));
+    for (std::string& value : values) inputs.push_back({std::string("--") + option, value});
+  }
+  return inputs;
+}
+
 void addIntrinsicsOption(cli::ArgParser& args) {
   args.option("intrinsics", "",
               "the camera's own calibration: OpenCV calibrateCamera YAML (camera_matrix, "

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cli.h"
+#include "output_file.h"
 
 #include "multislit/extractor.h"
 #include "multislit/image_file.h"  // readMonoImage
@@ -10,11 +11,18 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <initializer_list>
 #include <string>
+#include <vector>
 
 namespace multislit::apps {
 
 void writeImage(const std::string& path, const cv::Mat& image);
+
+/// The files and folders given by `options` (every value of a repeatable one), each named by its
+/// option, for refuseOverwritingInputs() and refuseOutputFolder(); options not given are left out.
+std::vector<NamedInput> inputsOf(const cli::ArgParser& args,
+                                 std::initializer_list<const char*> options);
 
 /// The simulator's peak memory by the size of its camera, measured (1296x964: 181 MB, 2592x1928:
 /// 368 MB), for the --sensor help of the commands that render.

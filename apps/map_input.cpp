@@ -50,6 +50,13 @@ MapInput openMapInput(const MapInputOptions& o, const SimulatedInputOpener& simu
   return in;
 }
 
+std::vector<NamedInput> inputFiles(const MapInputOptions& o) {
+  return {{o.prefix + "sequence", o.sequence},
+          {o.prefix + "calibration", o.calibration},
+          {o.prefix + "sensor", o.sensor},
+          {o.prefix + "intrinsics", o.intrinsics}};
+}
+
 MapPoses::MapPoses(const MapPoseOptions& options, const std::string& sequence, const MapInput& in,
                    const PipelineConfig& pipeline)
     : gait_(GaitConfig{}, pipeline.foot, pipeline.sensor.mount) {

@@ -5,6 +5,8 @@
 // is map_input_sim.h's, handed to openMapInput() by the programs that link the simulator.
 #pragma once
 
+#include "output_file.h"
+
 #include "multislit/gait.h"
 #include "multislit/odometry.h"
 #include "multislit/pipeline.h"
@@ -19,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace multislit::apps {
 
@@ -55,6 +58,10 @@ struct MapInput {
 /// Opens the simulated input of options.simulate into `in` (which holds the sensor and, when
 /// given, the calibration): map_input_sim.h's openSimulatedInput.
 using SimulatedInputOpener = std::function<MapInput(const MapInputOptions&, MapInput in)>;
+
+/// The files and the folder the options name (sequence, calibration, sensor, intrinsics), each
+/// named by its option with the caller's prefix: what an output folder must not overwrite.
+std::vector<NamedInput> inputFiles(const MapInputOptions& options);
 
 /// Opens the source (not started). Throws cli::UsageError for a wrong choice of options (the
 /// simulator without `simulated`), and what the files' loaders throw.

@@ -16,39 +16,36 @@ namespace multislit::apps {
 
 namespace {
 
-std::ofstream openCsv(const std::filesystem::path& path, const char* header) {
-  std::ofstream csv(path);
-  if (!csv) throw std::runtime_error("cannot write " + path.string());
-  csv << header << '\n';
-  return csv;
-}
+/// The files `map` writes into its output folder.
+const std::vector<std::string> kMapFiles{"decisions.csv",
+                                         "obstacles.csv",
+                                         "map.bt",
+                                         "map_top.png",
+                                         "fig15_obstacle_points.png",
+                                         "rdmap_most_obstacles.png",
+                                         "summary.txt"};
 
-/// Closes the files written row by row (live, for `tail -f`); those that could not be written
-/// whole are removed, not left cut, and the first is named in the error.
-void checkWritten(std::initializer_list<std::pair<std::ofstream*, std::filesystem::path>> files) {
-  std::string failed;
-  for (const auto& [csv, path] : files) {
-    csv->close();
-    if (*csv) continue;
-    std::error_code ignored;
-    std::filesystem::remove(path, ignored);
-    if (failed.empty()) failed = path.string();
-  }
-  if (!failed.empty())
-    throw std::runtime_error("could not write all of " + failed + " (disk full?)");
+/// `out`, checked against the inputs and created.
+const std::filesystem::path& preparedFolder(const std::filesystem::path& out,
+                                            const std::string& option,
+                                            const std::vector<NamedInput>& inputs) {
+  refuseOutputFolder(out, option, kMapFiles, inputs);
+  std::filesystem::create_directories(out);
+  return out;
 }
 
 }  // namespace
 
-MapRecorder::MapRecorder(const std::filesystem::path& out) : out_(out) {
-  std::filesystem::create_directories(out);
-  frames_csv_ = openCsv(out / "decisions.csv",
-                        "seq,stamp_us,x_m,y_m,yaw_deg,decision,reason,floor_found,valid_points,"
-                        "sigma_px,obstacle_points,groups,nearest_m,map_occupied,extract_ms,"
-                        "floor_ms,obstacles_ms,map_ms,walker_ms");
-  groups_csv_ = openCsv(out / "obstacles.csv",
-                        "seq,stamp_us,group,points,slits,x_m,y_m,z_m,world_x_m,world_y_m,"
-                        "length_m,width_m,height_m,distance_m");
+MapRecorder::MapRecorder(const std::filesystem::path& out, const std::string& option,
+                         const std::vector<NamedInput>& inputs)
+    : out_(preparedFolder(out, option, inputs)),
+      frames_csv_(out / "decisions.csv", OutputFile::Temporary::Live),
+      groups_csv_(out / "obstacles.csv", OutputFile::Temporary::Live) {
+  frames_csv_.stream() << "seq,stamp_us,x_m,y_m,yaw_deg,decision,reason,floor_found,valid_points,"
+                          "sigma_px,obstacle_points,groups,nearest_m,map_occupied,extract_ms,"
+                          "floor_ms,obstacles_ms,map_ms,walker_ms\n";
+  groups_csv_.stream() << "seq,stamp_us,group,points,slits,x_m,y_m,z_m,world_x_m,world_y_m,"
+                          "length_m,width_m,height_m,distance_m\n";
 }
 
 void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extract_seconds,
@@ -66,7 +63,7 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
       r.obstacles.pointCount(), groups.size(), groups.empty() ? NAN : groups[0].distance,
       map.occupiedCount(), 1e3 * extract_seconds, 1e3 * r.times.floor, 1e3 * r.times.obstacles,
       1e3 * r.times.map, 1e3 * r.times.walker);
-  frames_csv_ << line;
+  frames_csv_.stream() << line;
   for (std::size_t g = 0; g < groups.size(); ++g) {
     const Obstacle& o = groups[g];
     const Eigen::Vector2d world = r.body.toWorld(o.centroid.head<2>());
@@ -74,12 +71,12 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
                   "%llu,%llu,%zu,%zu,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", seq_ll,
                   stamp_ll, g, o.pointCount(), o.slits, o.centroid.x(), o.centroid.y(),
                   o.centroid.z(), world.x(), world.y(), o.length, o.width, o.height, o.distance);
-    groups_csv_ << line;
+    groups_csv_.stream() << line;
   }
-  // Whole rows reach the files each frame, groups first: `tail -f decisions.csv` follows a live
-  // run, and a row read there has its groups in obstacles.csv already.
-  groups_csv_.flush();
-  frames_csv_.flush();
+  // Whole rows reach the files each frame, groups first: `tail -f decisions.csv.part` follows a
+  // live run, and a row read there has its groups in obstacles.csv.part already.
+  groups_csv_.stream().flush();
+  frames_csv_.stream().flush();
   ++frames_;
   groups_ += groups.size();
   no_floor_ += !r.floor.found;
@@ -106,7 +103,8 @@ void MapRecorder::record(std::uint64_t seq, std::uint64_t stamp_us, double extra
 
 std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& heading,
                                 double seconds, bool interrupted) {
-  checkWritten({{&frames_csv_, out_ / "decisions.csv"}, {&groups_csv_, out_ / "obstacles.csv"}});
+  groups_csv_.commit();
+  frames_csv_.commit();
   const OccupancyMap& map = pipeline.map();
   writeWhole(out_ / "map.bt", [&map](const std::string& p) { map.save(p); });
   TopViewContent top;
@@ -145,9 +143,9 @@ std::string MapRecorder::finish(const Pipeline& pipeline, const std::string& hea
   if (unreadable_.size() > 20) o << "    ... and " << unreadable_.size() - 20 << " more\n";
   o << "what the robot was told:\n";
   for (const std::string& e : events_) o << "  " << e << "\n";
-  o << "outputs in " << out_.string()
-    << ": decisions.csv, obstacles.csv, map.bt, map_top.png, fig15_obstacle_points.png, "
-       "rdmap_most_obstacles.png, summary.txt\n";
+  o << "outputs in " << out_.string() << ":";
+  for (std::size_t k = 0; k < kMapFiles.size(); ++k) o << (k ? ", " : " ") << kMapFiles[k];
+  o << "\n";
   OutputFile summary(out_ / "summary.txt");
   summary.stream() << o.str();
   summary.commit();

@@ -1,7 +1,11 @@
 // What `multislit map` writes while a real or recorded walk goes on: one row per frame
 // (decisions.csv), one row per obstacle group (obstacles.csv), and at the end the OctoMap
-// (map.bt), its top view, Fig. 14 and 15 and a summary. Every row is whole when the run stops.
+// (map.bt), its top view, Fig. 14 and 15 and a summary. The two CSV files grow as
+// decisions.csv.part and obstacles.csv.part (for `tail -f`), a whole row each time, and are
+// renamed when the run ends; every file is whole or absent.
 #pragma once
+
+#include "output_file.h"
 
 #include "multislit/pipeline.h"
 
@@ -15,9 +19,11 @@ namespace multislit::apps {
 
 class MapRecorder {
  public:
-  /// Opens the CSV files in `out` (created); throws std::runtime_error naming a file it cannot
-  /// write.
-  explicit MapRecorder(const std::filesystem::path& out);
+  /// Opens the CSV files in `out` (created; given by `option`); throws std::runtime_error naming a
+  /// file it cannot write, or when `out` is one of `inputs` or would hold an output of the name
+  /// of one.
+  MapRecorder(const std::filesystem::path& out, const std::string& option,
+              const std::vector<NamedInput>& inputs);
 
   /// One processed frame: `seq` and `stamp_us` of the source, the CPU time of its extraction
   /// [s], the cloud given to the pipeline, what it gave and its map after the frame.
@@ -31,13 +37,14 @@ class MapRecorder {
   void unreadable(const std::string& what) { unreadable_.push_back(what); }
 
   /// map.bt, map_top.png, fig15_obstacle_points.png, rdmap_most_obstacles.png, summary.txt; the
-  /// CSV files closed. Returns the summary (also written). `heading`: what ran, on what.
+  /// CSV files completed under their names. Returns the summary (also written). `heading`: what
+  /// ran, on what.
   std::string finish(const Pipeline& pipeline, const std::string& heading, double seconds,
                      bool interrupted);
 
  private:
   std::filesystem::path out_;
-  std::ofstream frames_csv_, groups_csv_;
+  OutputFile frames_csv_, groups_csv_;  ///< decisions.csv and obstacles.csv
   std::vector<Pose2D> path_;
   std::vector<double> obstacle_points_;
   std::vector<std::string> events_, unreadable_;

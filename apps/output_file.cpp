@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstdio>
 
 #include <map>
 #include <stdexcept>
@@ -42,27 +43,36 @@ StopSignal::~StopSignal() {
 
 bool StopSignal::requested() { return g_stop_requested; }
 
-OutputFile::OutputFile(fs::path path) : path_(std::move(path)) {
+int interruptedNothingWritten(const std::string& command) {
+  std::printf("%s: interrupted (Ctrl-C or SIGTERM): nothing written\n", command.c_str());
+  return kInterruptedExit;
+}
+
+OutputFile::OutputFile(fs::path path, Temporary temporary) : path_(std::move(path)) {
   const fs::path folder = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
   std::error_code error;
-  const fs::file_status status = fs::status(path_, error);
-  // A device or a pipe (/dev/stdout, /dev/full) is written in place: it cannot be replaced.
-  direct_ = fs::exists(status) && !fs::is_regular_file(status);
   // Renaming over a link would replace the link, and what it points to would stay as it was.
-  if (!direct_ && fs::is_symlink(fs::symlink_status(path_, error)))
+  if (fs::is_symlink(fs::symlink_status(path_, error)))
     throw std::runtime_error("the output " + path_.string() +
                              " is a symbolic link: writing it would replace the link, not what "
                              "it points to; name that file itself");
+  // A device, a pipe or a folder cannot be replaced by a file written whole.
+  const fs::file_status status = fs::status(path_, error);
+  if (fs::exists(status) && !fs::is_regular_file(status))
+    throw std::runtime_error("the output " + path_.string() + " is " +
+                             (fs::is_directory(status) ? "a folder" : "a device, pipe or socket") +
+                             ", not a regular file: name a file");
+  const std::string name = path_.filename().string();
   temporary_ =
-      direct_ ? path_
-              : folder / ("." + path_.filename().string() + ".part-" + std::to_string(::getpid()));
+      folder / (temporary == Temporary::Live ? name + ".part"
+                                             : "." + name + ".part-" + std::to_string(::getpid()));
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
   if (!out_)
     throw std::runtime_error("cannot write " + path_.string() + " (in " + folder.string() + ")");
 }
 
 OutputFile::~OutputFile() {
-  if (committed_ || direct_) return;
+  if (committed_) return;
   out_.close();
   std::error_code ignored;
   fs::remove(temporary_, ignored);
@@ -90,12 +100,29 @@ void writeOdometry(const fs::path& path, const std::vector<OdometrySample>& samp
       [](const std::string& p) { Odometry::load(p); });
 }
 
-void refuseOverwritingInputs(const fs::path& output, const std::vector<std::string>& inputs) {
+void refuseOverwritingInputs(const fs::path& output, const std::vector<NamedInput>& inputs,
+                             const std::string& output_option) {
+  if (output.empty()) return;  // not asked for
   const fs::path out = resolved(output);
-  for (const std::string& input : inputs)
-    if (!input.empty() && resolved(input) == out)
-      throw std::runtime_error("the output " + output.string() + " is the input " + input +
-                               ": writing it would destroy the input; choose another --out");
+  for (const NamedInput& input : inputs)
+    if (!input.path.empty() && resolved(input.path) == out)
+      throw std::runtime_error("the output " + output.string() + " is the input " + input.path +
+                               (input.option.empty() ? "" : " (" + input.option + ")") +
+                               ": writing it would destroy the input; choose another " +
+                               output_option);
+}
+
+void refuseOutputFolder(const fs::path& folder, const std::string& option,
+                        const std::vector<std::string>& names,
+                        const std::vector<NamedInput>& inputs) {
+  const fs::path out = resolved(folder);
+  for (const NamedInput& input : inputs)
+    if (!input.path.empty() && resolved(input.path) == out)
+      throw std::runtime_error(option + " " + folder.string() + " is the input " + input.path +
+                               (input.option.empty() ? "" : " (" + input.option + ")") +
+                               ": the outputs would be written into an input; choose another " +
+                               option);
+  for (const std::string& name : names) refuseOverwritingInputs(folder / name, inputs, option);
 }
 
 void refuseSameOutputTwice(const std::vector<fs::path>& outputs,

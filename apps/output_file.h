@@ -15,12 +15,18 @@ namespace multislit::apps {
 
 /// A file written whole or not at all. Write to stream(); commit() makes it appear under its
 /// name (throws std::runtime_error naming it when the disk is full or it cannot be written);
-/// destroyed without commit() (an error), the temporary file goes. A device or a pipe
-/// (/dev/stdout) is written in place, its write errors reported by commit() all the same; a
-/// symbolic link to anything else (a file, nothing) is refused by the constructor.
+/// destroyed without commit() (an error), the temporary file goes. The constructor refuses a
+/// name that is a symbolic link (renaming over it would replace the link, and writing through it
+/// would write what it points to) or anything but a regular file (a device such as /dev/stdout,
+/// a pipe, a folder).
 class OutputFile {
  public:
-  explicit OutputFile(std::filesystem::path path);
+  /// How the temporary file is named.
+  enum class Temporary {
+    Hidden,  ///< .NAME.part-PID, beside it
+    Live,    ///< NAME.part, beside it: a file that grows row by row, for `tail -f NAME.part`
+  };
+  explicit OutputFile(std::filesystem::path path, Temporary temporary = Temporary::Hidden);
   ~OutputFile();
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
@@ -36,7 +42,6 @@ class OutputFile {
  private:
   std::filesystem::path path_, temporary_;
   std::ofstream out_;
-  bool direct_ = false;  ///< a device or pipe, written in place
   bool committed_ = false;
 };
 
@@ -78,10 +83,30 @@ class StopSignal {
 };
 inline constexpr int kInterruptedExit = 130;  ///< 128 + SIGINT, as shells report it
 
-/// Throws std::runtime_error when `output` names the same file as one of `inputs` (after
-/// resolving links and relative paths): writing it would destroy that input.
+/// For a command that writes nothing of a part of its work (a table of fewer poses, a
+/// calibration of fewer images): says "COMMAND: interrupted ...: nothing written" on stdout and
+/// returns kInterruptedExit.
+int interruptedNothingWritten(const std::string& command);
+
+/// An input of a command: the option that names it ("--scene"; "" for an operand) and its path
+/// ("" when not given).
+struct NamedInput {
+  std::string option;
+  std::string path;
+};
+
+/// Throws std::runtime_error when `output` (given by `output_option`) names the same file as one
+/// of `inputs` (after resolving links and relative paths): writing it would destroy that input.
 void refuseOverwritingInputs(const std::filesystem::path& output,
-                             const std::vector<std::string>& inputs);
+                             const std::vector<NamedInput>& inputs,
+                             const std::string& output_option = "--out");
+
+/// For an output folder (`option`: "--out", "--record") into which a command writes the files
+/// `names`: throws std::runtime_error when the folder is one of `inputs` (a recording's folder,
+/// a file), or when one of those files would be one of them.
+void refuseOutputFolder(const std::filesystem::path& folder, const std::string& option,
+                        const std::vector<std::string>& names,
+                        const std::vector<NamedInput>& inputs);
 
 /// Throws std::runtime_error when two of `outputs` are the same file (the second would silently
 /// replace the first), naming both inputs they come from (`sources`, parallel to `outputs`).

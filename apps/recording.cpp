@@ -7,12 +7,12 @@
 
 namespace multislit::apps {
 
-SequenceRecorder::SequenceRecorder(const std::filesystem::path& folder, const Reference* reference,
-                                   const SensorConfig& sensor,
-                                   const std::vector<std::string>& inputs)
+SequenceRecorder::SequenceRecorder(const std::filesystem::path& folder, const std::string& option,
+                                   const Reference* reference, const SensorConfig& sensor,
+                                   const std::vector<NamedInput>& inputs)
     : folder_(folder) {
-  for (const char* name : {"calibration.yaml", "sensor.yaml", "frames.csv", "odometry.csv"})
-    refuseOverwritingInputs(folder / name, inputs);
+  refuseOutputFolder(folder, option,
+                     {"calibration.yaml", "sensor.yaml", "frames.csv", "odometry.csv"}, inputs);
   std::filesystem::create_directories(folder);
   if (reference != nullptr)
     writeWhole(

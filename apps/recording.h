@@ -23,10 +23,12 @@ namespace multislit::apps {
 class SequenceRecorder {
  public:
   /// Writes calibration.yaml (when `reference` is given) and sensor.yaml into `folder`
-  /// (created), each whole or absent, and begins frames.csv; throws std::runtime_error when one of
-  /// them would overwrite one of `inputs` (`walk --sensor rec/sensor.yaml --record rec`).
-  SequenceRecorder(const std::filesystem::path& folder, const Reference* reference,
-                   const SensorConfig& sensor, const std::vector<std::string>& inputs);
+  /// (created), each whole or absent, and begins frames.csv; throws std::runtime_error when the
+  /// folder (given by `option`) is one of `inputs` or one of its files would overwrite one of
+  /// them (`walk --sensor rec/sensor.yaml --record rec`).
+  SequenceRecorder(const std::filesystem::path& folder, const std::string& option,
+                   const Reference* reference, const SensorConfig& sensor,
+                   const std::vector<NamedInput>& inputs);
   /// One frame: frame_NNNNNN.png (written whole) and its row of frames.csv; `clock` names the
   /// clock of its stamp ("camera", "host", "simulated").
   void add(const cv::Mat& image, std::uint64_t stamp_us, const std::string& clock);

@@ -3,6 +3,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <cstdint>
@@ -14,15 +15,23 @@
 namespace multislit {
 namespace {
 
-/// Random access to a file's bytes; a read past its end gives false.
+/// Random access to a file's bytes; a read past its end gives false. Reads are served from a
+/// block of the file held in memory: a header is read a few bytes at a time (a TIFF directory of
+/// 65535 entries, a PNM's digits), and a seek and read of the file for each cost system calls.
 class Bytes {
  public:
   explicit Bytes(const std::string& path) : in_(path, std::ios::binary) {}
   bool read(std::uint64_t offset, std::size_t n, std::uint8_t* out) {
-    in_.clear();
-    in_.seekg(static_cast<std::streamoff>(offset));
-    in_.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(n));
-    return in_.gcount() == static_cast<std::streamsize>(n);
+    if (offset < start_ || offset + n > start_ + held_) {  // not in the block: read the next one
+      in_.clear();
+      in_.seekg(static_cast<std::streamoff>(offset));
+      in_.read(reinterpret_cast<char*>(block_.data()), static_cast<std::streamsize>(block_.size()));
+      start_ = offset;
+      held_ = static_cast<std::size_t>(std::max<std::streamsize>(in_.gcount(), 0));
+    }
+    if (offset + n > start_ + held_) return false;
+    std::copy_n(block_.begin() + static_cast<std::ptrdiff_t>(offset - start_), n, out);
+    return true;
   }
   /// An unsigned integer of n (<= 4) bytes, big- or little-endian; nullopt past the end.
   std::optional<std::uint32_t> number(std::uint64_t offset, std::size_t n, bool big_endian) {
@@ -36,6 +45,9 @@ class Bytes {
 
  private:
   std::ifstream in_;
+  std::array<std::uint8_t, 4096> block_{};  ///< the file's bytes from start_, held_ of them
+  std::uint64_t start_ = 0;
+  std::size_t held_ = 0;
 };
 
 std::optional<cv::Size> sizeOf(std::optional<std::uint32_t> w, std::optional<std::uint32_t> h) {

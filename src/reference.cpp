@@ -172,14 +172,13 @@ Reference Reference::fromImages(const std::vector<cv::Mat>& images, const Refere
   if (images.empty()) throw std::invalid_argument("reference: no image given");
   if (images.size() == 1) return fromImage(images.front(), config);
   const cv::Mat& first = images.front();
-  cv::Mat sum = cv::Mat::zeros(first.size(), CV_64F), f;
+  cv::Mat sum = cv::Mat::zeros(first.size(), CV_64F);
   for (std::size_t k = 0; k < images.size(); ++k) {
     const cv::Mat& image = images[k];
     if (image.size() != first.size() || image.type() != first.type())
       throw std::invalid_argument("reference image " + std::to_string(k + 1) +
                                   ": size or type differs from the first image");
-    image.convertTo(f, CV_64F);
-    sum += f;
+    cv::add(sum, image, sum, cv::noArray(), CV_64F);  // no double copy of the image
   }
   // The mean in 16-bit DN (8-bit images times 257): the averaging keeps its fractions.
   const double to16 = first.depth() == CV_8U ? 257.0 : 1.0;

@@ -20,17 +20,26 @@ namespace {
 
 constexpr double kFwhmPerSigma = 2.3548;
 
-/// The image as float with every row smoothed by a Gaussian of `sigma` [px] along the row only:
-/// a slit's profile lies along the row, and a symmetric kernel keeps its centre where it is.
-cv::Mat smoothRows(const cv::Mat& image, double sigma) {
-  cv::Mat out;
-  image.convertTo(out, CV_32F);
-  const int half = static_cast<int>(std::ceil(3 * sigma));
-  const cv::Mat along = cv::getGaussianKernel(2 * half + 1, sigma, CV_32F);
-  const cv::Mat across = cv::Mat::ones(1, 1, CV_32F);
-  cv::sepFilter2D(out, out, CV_32F, along, across, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
-  return out;
-}
+/// Rows of an image as float, each smoothed by a Gaussian of `sigma` [px] along the row only: a
+/// slit's profile lies along the row, and a symmetric kernel keeps its centre where it is. One
+/// row at a time, so that no float copy of the whole image is held (1 GB at 16384 x 16384 px).
+class RowSmoother {
+ public:
+  explicit RowSmoother(double sigma)
+      : along_(
+            cv::getGaussianKernel(2 * static_cast<int>(std::ceil(3 * sigma)) + 1, sigma, CV_32F)),
+        across_(cv::Mat::ones(1, 1, CV_32F)) {}
+  /// Row `r` of `image`, smoothed; valid until the next call.
+  const cv::Mat& operator()(const cv::Mat& image, int r) {
+    image.row(r).convertTo(row_, CV_32F);
+    cv::sepFilter2D(row_, row_, CV_32F, along_, across_, cv::Point(-1, -1), 0,
+                    cv::BORDER_REPLICATE);
+    return row_;
+  }
+
+ private:
+  cv::Mat along_, across_, row_;
+};
 
 /// Full width at half maximum of the profile whose top is p[x] over a background `low`, by
 /// linear interpolation of both flanks; 0 when a flank does not fall within `reach` pixels.
@@ -188,11 +197,11 @@ double stripeWidth(const cv::Mat& image, double min_contrast) {
   constexpr double kSmooth = 1.5;  // [px] against speckle
   constexpr int kReach = 24;       // [px] a stripe's surroundings, under the slits' spacing
   constexpr int kRowStep = 4;
-  const cv::Mat s = smoothRows(image, kSmooth);
+  RowSmoother smooth(kSmooth);
   std::vector<double> widths;
-  for (int r = 0; r < s.rows; r += kRowStep) {
-    const float* p = s.ptr<float>(r);
-    for (int x = kReach; x + kReach < s.cols; ++x) {
+  for (int r = 0; r < image.rows; r += kRowStep) {
+    const float* p = smooth(image, r).ptr<float>();
+    for (int x = kReach; x + kReach < image.cols; ++x) {
       if (!(p[x] > p[x - 1] && p[x] >= p[x + 1])) continue;
       float low = p[x];
       bool top = true;
@@ -206,7 +215,7 @@ double stripeWidth(const cv::Mat& image, double min_contrast) {
     }
   }
   if (widths.empty()) return 0;
-  const double measured = upperMedian(widths), smear = kFwhmPerSigma * kSmooth;
+  const double measured = upperMedian(std::move(widths)), smear = kFwhmPerSigma * kSmooth;
   return std::sqrt(std::max(measured * measured - smear * smear, 1.0));
 }
 
@@ -214,6 +223,8 @@ double imageNoise(const cv::Mat& image) {
   constexpr int kRowStep = 8;
   cv::Mat row;
   std::vector<double> d;
+  d.reserve(static_cast<std::size_t>((image.rows + kRowStep - 1) / kRowStep) *
+            static_cast<std::size_t>(std::max(image.cols - 2, 0)));
   for (int r = 0; r < image.rows; r += kRowStep) {
     image.row(r).convertTo(row, CV_64F);
     const auto* p = row.ptr<double>();
@@ -221,7 +232,8 @@ double imageNoise(const cv::Mat& image) {
       d.push_back(std::abs(p[x] - 0.5 * (p[x - 1] + p[x + 1])));
   }
   if (d.empty()) return 0;
-  return 1.4826 * upperMedian(d) / std::sqrt(1.5);  // the second difference has 1.5 variances
+  return 1.4826 * upperMedian(std::move(d)) /
+         std::sqrt(1.5);  // the second difference has 1.5 variances
 }
 
 namespace {
@@ -243,8 +255,12 @@ DetectedSlits detectSlitsInRange(const cv::Mat& image, const ReferenceConfig& co
   // Smoothed over 0.4 of the stripe's width, speckle no longer splits a profile in two.
   const double sigma = std::max(1.0, 0.4 * width);
   const double smoothed_width = std::hypot(width, kFwhmPerSigma * sigma);
-  cv::Mat smooth16;
-  smoothRows(image, sigma).convertTo(smooth16, CV_16U, to16);
+  cv::Mat smooth16(image.size(), CV_16U);
+  RowSmoother smooth(sigma);
+  for (int r = 0; r < image.rows; ++r) {
+    cv::Mat row = smooth16.row(r);  // a header: convertTo writes into smooth16
+    smooth(image, r).convertTo(row, CV_16U, to16);
+  }
   ProfileParams params;
   params.estimator = config.estimator;
   params.min_contrast = min_contrast;

@@ -76,13 +76,16 @@ rendered=$(sed -n 's/.*; \([0-9]*\) rendered, \([0-9]*\) sent late.*/\1/p' "$wor
 echo "emulate --walk: $(tail -1 "$work/live.log")"
 trap - EXIT
 
-# 3. Ctrl-C: the run ends at a frame boundary, every file complete, rc 130.
+# 3. Ctrl-C: the run ends at a frame boundary, every file complete, rc 130. While it runs,
+# decisions.csv grows as decisions.csv.part (for tail -f), and takes its name at the end.
 "$multislit" map --simulate floor --out "$work/interrupted" >"$work/interrupted.log" 2>&1 &
 mapper=$!
+live=$work/interrupted/decisions.csv.part
 for _ in $(seq 1 600); do
-  [[ -f $work/interrupted/decisions.csv && $(wc -l <"$work/interrupted/decisions.csv") -ge 4 ]] && break
+  [[ -f $live && $(wc -l <"$live") -ge 4 ]] && break
   sleep 0.1
 done
+[[ -f $live && ! -e $work/interrupted/decisions.csv ]] || fail "no live decisions.csv.part"
 kill -INT $mapper
 wait $mapper
 rc=$?
@@ -92,6 +95,7 @@ grep -q "(interrupted)" "$work/interrupted/summary.txt" || fail "no summary afte
 [[ $(tail -c 1 "$work/interrupted/decisions.csv" | od -An -c | tr -d ' ') == '\n' ]] ||
   fail "decisions.csv cut mid-row"
 awk -F, 'NF != 19 { exit 1 }' "$work/interrupted/decisions.csv" || fail "a short row"
+[[ -z $(find "$work/interrupted" -name '*.part*') ]] || fail "a temporary file was left"
 echo "Ctrl-C: rc 130 after $(($(wc -l <"$work/interrupted/decisions.csv") - 1)) whole rows"
 
 # 4. Errors.

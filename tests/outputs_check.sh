@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # outputs_check: no output clobbers an input, and every output is whole or absent (issue 15).
-#  - an output equal to an input, or two outputs of one name: refused, the input unchanged;
+#  - an output equal to an input, an output folder that is an input, or two outputs of one name:
+#    refused, the input unchanged; an output that is a link, a device or a pipe: refused;
 #  - a full disk (/dev/full, a file-size limit): a non-zero exit and no cut file;
-#  - SIGINT in a long detect, walk or simulate: rc 130 at a frame boundary, every file whole.
+#  - SIGINT in a long detect, walk or simulate: rc 130 at a frame boundary, every file whole;
+#    in calibrate, table1 or bench: rc 130 and nothing written.
 # Run as: bash outputs_check.sh <multislit> <work dir>
 set -u
 M=$1
@@ -33,11 +35,31 @@ refused "is the input s/sensor.yaml" "$M" walk --sensor s/sensor.yaml --frames 1
 ln -s c.orig.yaml link.jsonl && ln -s /proc/self/fd/1 fd1.jsonl
 refused "link.jsonl is a symbolic link" "$M" detect --calibration c.yaml --out link.jsonl f.png
 refused "fd1.jsonl is a symbolic link" "$M" detect --calibration c.yaml --out fd1.jsonl f.png
+refused "/dev/stdout is a symbolic link" "$M" detect --calibration c.yaml --out /dev/stdout f.png
+refused "/dev/null is a device, pipe or socket" "$M" detect --calibration c.yaml --out /dev/null \
+  f.png
+mkfifo fifo.jsonl
+refused "fifo.jsonl is a device, pipe or socket" "$M" detect --calibration c.yaml \
+  --out fifo.jsonl f.png
+mkdir -p dir.jsonl
+refused "dir.jsonl is a folder" "$M" detect --calibration c.yaml --out dir.jsonl f.png
 [[ -L link.jsonl && -L fd1.jsonl ]] && cmp -s c.yaml c.orig.yaml || fail "a link was replaced"
-echo "inputs: 9 clobbering commands refused, inputs unchanged"
+# An output folder that is an input (the recording map reads, a file), or a file of one.
+ls s >s.before
+refused "--out s is the input s (--sequence)" "$M" map --sequence s --calibration c.yaml --out s
+refused "--out ./s/ is the input s (--sequence)" "$M" map --sequence s --calibration c.yaml \
+  --out ./s/
+refused "--out s/scene.yaml is the input s/scene.yaml (--scene)" "$M" simulate --scenario ball \
+  --scene s/scene.yaml --frames 1 --out s/scene.yaml
+refused "is the input s/sensor.yaml (--sensor)" "$M" table1 --sensor s/sensor.yaml --out s/sensor.yaml
+refused "is the input c.yaml (--calibration)" "$M" bench --sequence s --calibration c.yaml \
+  --out c.yaml
+refused "the output s is the input s (--sequence)" "$M" bench --sequence s --calibration c.yaml --out s
+ls s | diff -q - s.before >/dev/null || fail "an input folder was written to: $(ls s | diff - s.before)"
+cmp -s s/scene.yaml s/scene.orig.yaml && cmp -s c.yaml c.orig.yaml || fail "an input was changed"
+echo "inputs: $refused_count clobbering commands refused, inputs unchanged"
 
 # 2. A full disk is an error, and leaves nothing cut.
-refused "could not write all of /dev/full" "$M" detect --calibration c.yaml --out /dev/full f.png
 (trap '' XFSZ; ulimit -f 8; "$M" calibrate --reference s/reference.png --out big.yaml) \
   >out.log 2>&1 && fail "calibrate on a full disk reported success"
 [[ ! -e big.yaml ]] || fail "a cut big.yaml was left"
@@ -66,7 +88,7 @@ full walk "$M" walk --frames 20 --record fr --out fw
 full table1 "$M" table1 --frames 2 --out ft
 no_cut_files fm fs fr fw ft
 [[ ! -e ft/table1.csv || -e ft/fig12.png ]] || fail "table1: no figure, yet the table"
-[[ -z $(find . -name '*.part-*') ]] || fail "temporary files left: $(find . -name '*.part-*')"
+[[ -z $(find . -name '*.part*') ]] || fail "temporary files left: $(find . -name '*.part*')"
 echo "full disk: calibrate, detect, map, simulate, walk --record and table1 fail, no cut file"
 
 # interrupt NAME SECONDS COMMAND...: SIGINT after SECONDS; the command must exit with 130.
@@ -116,5 +138,11 @@ echo "simulate: interrupted after $pngs frames, frames.csv and odometry.csv whol
 interrupt table1 3 "$M" table1 --frames 1000 --out t1
 [[ ! -e t1/table1.csv && ! -e t1/fig12.png ]] || fail "table1: a table of part of the frames"
 interrupt bench 3 "$M" bench --frames 400 --passes 1000
-echo "table1, bench: interrupted, nothing written"
+# calibrate reads and averages 100 reference images (1.4 s for 60 on a quiet machine): the SIGINT comes while it reads.
+references=()
+for _ in $(seq 1 100); do references+=(--reference s/reference.png); done
+interrupt calibrate 0.2 "$M" calibrate "${references[@]}" --out ci.yaml
+grep -q "calibrate: interrupted" calibrate.log || fail "calibrate: no word of the interruption"
+[[ ! -e ci.yaml && -z $(find . -name '.ci.yaml.part*') ]] || fail "calibrate wrote after SIGINT"
+echo "table1, bench, calibrate: interrupted, nothing written"
 echo "outputs_check: all checks passed"

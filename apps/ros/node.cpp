@@ -44,7 +44,8 @@ Node::Node(const NodeConfig& config, ros::NodeHandle& nh, ros::NodeHandle& pnh)
       pipeline_(pipelineConfig(in_, config)),
       extractor_(in_.reference),
       poses_(config_, in_, pipeline_.config(), nh) {
-  if (!config_.out.empty()) recorder_.emplace(config_.out);
+  if (!config_.out.empty())
+    recorder_.emplace(config_.out, config_.input.prefix + "out", apps::inputFiles(config_.input));
   rdmap_ = pnh.advertise<sensor_msgs::PointCloud2>("rdmap", 5);
   // The floor and the decision are latched as the map is: who subscribes late (a controller,
   // rostopic echo) gets the last frame's at once.

@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <climits>
 #include <cstdlib>
+#include <cstring>
+#include <string>
 #include <string_view>
 
 namespace multislit {
@@ -132,11 +134,19 @@ std::size_t ShapeScan::token(std::string_view s, std::size_t at, int& begun) {
 
 /// A key (up to ':'; in block context also any plain value, which the parser reads the same
 /// way), or a plain value in a flow collection (up to ',', ']' or '}').
+/// `s` is a line of the text yamlShapeProblem() reads: it is followed by '\n' or by the string's
+/// terminating NUL, so that strcspn (a library scan: this one runs over most bytes of a file)
+/// stops at the line's end at the latest.
 std::size_t ShapeScan::keyOrPlain(std::string_view s, std::size_t at, bool key, int& begun) {
-  std::size_t end = at;
-  while (end < s.size() && printable(s[end]) &&
-         (key ? s[end] != ':' : s[end] != ',' && s[end] != ']' && s[end] != '}'))
-    ++end;
+  // The bytes that end a key or a plain value: its delimiters, and every control byte.
+#define MULTISLIT_CONTROL_BYTES                                                                  \
+  "\x01\x02\x03\x04\x05\x06\x07\x08\x09\x0a\x0b\x0c\x0d\x0e\x0f\x10\x11\x12\x13\x14\x15\x16\x17" \
+  "\x18\x19\x1a\x1b\x1c\x1d\x1e\x1f"
+  static constexpr const char* kKeyEnd = ":" MULTISLIT_CONTROL_BYTES;
+  static constexpr const char* kPlainEnd = ",]}" MULTISLIT_CONTROL_BYTES;
+#undef MULTISLIT_CONTROL_BYTES
+  const std::size_t end =
+      std::min(s.size(), at + std::strcspn(s.data() + at, key ? kKeyEnd : kPlainEnd));
   if (key && end < s.size() && s[end] == ':') {
     begun += stack_.empty() ? 1 : 0;  // a block map begun (or an entry of one)
     next_ = Next::Value;
@@ -195,26 +205,26 @@ std::string layoutProblem(const std::string& text) {
   std::size_t number = 0;
   for (std::size_t at = 0; at < text.size();) {
     const std::size_t end = std::min(text.find('\n', at), text.size());
-    const std::string line = text.substr(at, end - at);
+    const std::string_view line = std::string_view(text).substr(at, end - at);
     at = end + 1;
     ++number;
     const std::size_t first = line.find_first_not_of(kSpace);
-    if (first == std::string::npos || line[first] == '#') continue;  // blank or a comment
-    const std::string where = "line " + std::to_string(number);
-    if (line[first] == ':') return where + " starts with ':' (an empty key)";
+    if (first == std::string_view::npos || line[first] == '#') continue;  // blank or a comment
+    const auto where = [number] { return "line " + std::to_string(number); };
+    if (line[first] == ':') return where() + " starts with ':' (an empty key)";
     if (!content) {
       const bool dashes = line.compare(0, 3, "---") == 0;
       const std::size_t after = dashes ? line.find_first_not_of(kSpace, 3) : 0;
-      const bool document_start = dashes && (after == std::string::npos || line[after] == '#');
-      if (document_start && started) return where + " starts a second document (\"---\")";
+      const bool document_start = dashes && (after == std::string_view::npos || line[after] == '#');
+      if (document_start && started) return where() + " starts a second document (\"---\")";
       started = started || document_start;
       if (line[0] == '%' || document_start) continue;  // a directive (%YAML:1.0), "---"
       content = true;
       const auto c = static_cast<unsigned char>(line[0]);
       if (!std::isalnum(c) && c != '_')
-        return where + " must be the first key of a map, at the start of the line";
+        return where() + " must be the first key of a map, at the start of the line";
     } else if (line.compare(0, 3, "...") == 0) {
-      return where + " ends the document (\"...\"): a file holds one map";
+      return where() + " ends the document (\"...\"): a file holds one map";
     }
   }
   return "";

@@ -240,10 +240,13 @@ Photometry randomPhotometry(uint64_t seed) {
 
 Photometry choosePhotometry(const std::string& choice, uint64_t seed) {
   if (choice == "random") return randomPhotometry(seed);
-  const std::filesystem::path path(choice);
-  if (path.extension() == ".yaml" || path.extension() == ".yml")
-    return loadPhotometry(path.string());
+  if (isPhotometryFile(choice)) return loadPhotometry(choice);
   return photometryPreset(choice);
+}
+
+bool isPhotometryFile(const std::string& choice) {
+  const std::filesystem::path extension = std::filesystem::path(choice).extension();
+  return extension == ".yaml" || extension == ".yml";
 }
 
 void setObjectSurfaces(std::vector<SceneObject>& objects, double albedo, double stripe_width) {

@@ -39,6 +39,8 @@ Photometry randomPhotometry(uint64_t seed);
 /// photometry YAML (.yaml or .yml, from savePhotometry). Throws std::invalid_argument listing the
 /// presets for any other name.
 Photometry choosePhotometry(const std::string& choice, uint64_t seed);
+/// Whether that choice names a photometry YAML (.yaml or .yml), not a preset or "random".
+bool isPhotometryFile(const std::string& choice);
 
 /// Sets every object's albedo to `albedo` and its stripe width factor to `stripe_width`; a value
 /// < 0 leaves each object its own.
