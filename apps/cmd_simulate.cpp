@@ -53,7 +53,8 @@ void addSimulateOptions(cli::ArgParser& args) {
   args.option("seed", "",
               "noise seed (and random photometry; default 1, or the photometry.yaml's); the "
               "same seed gives the same bytes");
-  args.option("photometry", "", "preset, random or YAML: light, speckle, stripes, floor, objects");
+  args.option("photometry", "",
+              "preset, random or YAML: light, speckle, stripes, floor, objects, lens");
   args.option("bit-depth", "", "8 or 16 bits per pixel (default 8, or the photometry's)");
   args.option("distortion", "",
               "k1,k2,p1,p2[,k3[,k4,k5,k6]]: render through a lens with OpenCV's distortion "
@@ -212,6 +213,9 @@ int runSimulate(int argc, char** argv) {
           ? static_cast<uint64_t>(args.integer("seed", 0, std::numeric_limits<long>::max()))
           : 1u;
   const Photometry photometry = photometryFromArgs(args, seed, scenario.scene);
+  // The photometry's lens, unless --distortion names one.
+  if (photometry.distortion.any() && !args.has("distortion"))
+    sensor.camera.distortion = photometry.distortion;
   const long frames = args.integer("frames", 0, 10000000);
   const double fps = args.number("fps", 0.01, 100000);
   SensorConfig used = sensor;

@@ -115,6 +115,13 @@ void refuseOverwritingInputs(const fs::path& output, const std::vector<NamedInpu
 void refuseOutputFolder(const fs::path& folder, const std::string& option,
                         const std::vector<std::string>& names,
                         const std::vector<NamedInput>& inputs) {
+  // The folder itself, not through a link: outputs never follow a symbolic link.
+  const fs::path named = folder.has_filename() ? folder : folder.parent_path();
+  std::error_code ec;
+  if (fs::is_symlink(named, ec))
+    throw std::runtime_error(option + " " + folder.string() + " is a symbolic link (to " +
+                             fs::read_symlink(named, ec).string() +
+                             "): outputs never follow a link; give the folder itself");
   const fs::path out = resolved(folder);
   for (const NamedInput& input : inputs)
     if (!input.path.empty() && resolved(input.path) == out)

@@ -38,6 +38,11 @@ refused "fd1.jsonl is a symbolic link" "$M" detect --calibration c.yaml --out fd
 refused "/dev/stdout is a symbolic link" "$M" detect --calibration c.yaml --out /dev/stdout f.png
 refused "/dev/null is a device, pipe or socket" "$M" detect --calibration c.yaml --out /dev/null \
   f.png
+# An output folder that is a link: its files would land wherever it points.
+mkdir -p elsewhere && ln -s elsewhere outlink
+refused "outlink is a symbolic link" "$M" simulate --scenario ball --frames 1 --out outlink
+refused "outlink/ is a symbolic link" "$M" walk --frames 1 --out outlink/
+[[ -z $(ls elsewhere) ]] || fail "an output went through the link outlink"
 mkfifo fifo.jsonl
 refused "fifo.jsonl is a device, pipe or socket" "$M" detect --calibration c.yaml \
   --out fifo.jsonl f.png

@@ -2,6 +2,7 @@
 // draws) measured on renders of a 320 x 240 window of the paper's sensor, against exact truth.
 #include "multislit/sim/photometry.h"
 #include "multislit/sim/scenarios.h"
+#include "multislit/sim/walk.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -338,6 +339,7 @@ TEST(Photometry, FilesWithUnknownKeysOrValuesOutOfRangeAreRefusedNamingTheField)
       {"noise: 7", "field 'noise' must be 0 or 1"},
       {"floor_texture_seed: -1", "'floor_texture_seed' must be an integer"},
       {"bit_depth: 8.5", "'bit_depth' must be an integer"},
+      {"k1: .nan", "photometry.k1 must be finite"},
   };
   for (const auto& [line, expected] : cases) {
     const std::string key = line.substr(0, line.find(':') + 1);
@@ -357,5 +359,31 @@ TEST(Photometry, FilesWithUnknownKeysOrValuesOutOfRangeAreRefusedNamingTheField)
       EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
     }
   }
+  std::filesystem::remove(path);
+}
+
+// A photometry file may carry the lens the images are seen through: simulate and walk render
+// through it (and the walk's reference and extractor undistort with it); a pinhole's file has no
+// coefficient.
+TEST(Photometry, ALensInTheFileIsReadBackAndTheWalkSeesThroughIt) {
+  const std::string path = tempPath("multislit_photometry_lens.yaml");
+  savePhotometry(photometryPreset("default"), path);
+  EXPECT_EQ(fileText(path).find("k1:"), std::string::npos);
+  Photometry lens = photometryPreset("default");
+  lens.distortion.k1 = -0.03;
+  lens.distortion.p1 = 5e-4;
+  savePhotometry(lens, path);
+  const Photometry back = loadPhotometry(path);
+  EXPECT_DOUBLE_EQ(back.distortion.k1, -0.03);
+  EXPECT_DOUBLE_EQ(back.distortion.p1, 5e-4);
+  EXPECT_DOUBLE_EQ(back.distortion.k2, 0.0);
+  WalkConfig walk;
+  applyPhotometry(back, walk);
+  EXPECT_DOUBLE_EQ(walk.pipeline.sensor.camera.distortion.k1, -0.03);
+  EXPECT_DOUBLE_EQ(walk.pipeline.sensor.camera.distortion.p1, 5e-4);
+  WalkConfig pinhole;
+  pinhole.pipeline.sensor.camera.distortion.k2 = 0.01;  // a sensor file's lens is kept
+  applyPhotometry(photometryPreset("tiles"), pinhole);
+  EXPECT_DOUBLE_EQ(pinhole.pipeline.sensor.camera.distortion.k2, 0.01);
   std::filesystem::remove(path);
 }

@@ -199,6 +199,7 @@ void Photometry::validate() const {
     throw std::invalid_argument("photometry: object_albedo must be <= 1 (< 0: keep)");
   if (!(object_stripe_width >= 0.25 && object_stripe_width <= 4))
     throw std::invalid_argument("photometry: object_stripe_width must be in [0.25, 4]");
+  distortion.validate("photometry");
 }
 
 std::vector<std::string> photometryPresetNames() {
@@ -304,6 +305,7 @@ const Field<Photometry> kObjectKeys[] = {{"object_albedo", &Photometry::object_a
                                          {"object_stripe_width", &Photometry::object_stripe_width}};
 const Field<RenderConfig> kSamplingKeys[] = {{"bit_depth", &RenderConfig::bit_depth},
                                              {"supersample", &RenderConfig::supersample}};
+const Field<Photometry> kLensKeys[] = {{"distortion", &Photometry::distortion}};  // when any
 
 // visit(keys, part) for the tables of a photometry file's numbers, in the file's order.
 template <typename P, typename Visit>
@@ -312,6 +314,7 @@ void forEachTable(P& p, Visit&& visit) {
   visit(kFloorKeys, p.floor);
   visit(kObjectKeys, p);
   visit(kSamplingKeys, p.render);
+  visit(kLensKeys, p);
 }
 
 }  // namespace

@@ -46,6 +46,7 @@ void applyPhotometry(const Photometry& photometry, WalkConfig& config) {
   config.scene.floor = photometry.floor;
   config.scene.object_albedo = photometry.object_albedo;
   config.scene.object_stripe_width = photometry.object_stripe_width;
+  if (photometry.distortion.any()) config.pipeline.sensor.camera.distortion = photometry.distortion;
 }
 
 WalkWorld::WalkWorld(const WalkSceneConfig& config, double frame_rate)

@@ -3,6 +3,7 @@
 // floor texture and gloss, object surfaces). The ground truth never depends on any of it.
 #pragma once
 
+#include "multislit/lens.h"
 #include "multislit/sim/scene.h"
 #include "multislit/sim/simulator.h"
 
@@ -13,13 +14,17 @@
 namespace multislit {
 
 /// Everything photometric about a simulated frame: the camera's rendering, the floor's surface
-/// and the objects' surfaces. Geometry (scene shapes, sensor, pose) is not part of it.
+/// and the objects' surfaces, and the lens the image is seen through. Geometry (scene shapes,
+/// sensor, pose) is not part of it.
 struct Photometry {
   std::string name = "default";      ///< preset name, or "random-<seed>"
   RenderConfig render;               ///< laser, ambient, speckle, stripe width, blur, noise, gamma
   FloorConfig floor;                 ///< texture, albedo, gloss, stripe width on the floor
   double object_albedo = -1.0;       ///< every object's albedo; < 0 keeps each object's own [-]
   double object_stripe_width = 1.0;  ///< every object's stripe width factor (SceneObject) [-]
+  /// The camera lens's distortion (OpenCV's coefficients, keys k1 .. k6, p1, p2); all zero keeps
+  /// the sensor file's lens. Replaces the sensor's in `simulate` and `walk`.
+  LensDistortion distortion;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
