@@ -281,8 +281,50 @@ uint64_t parseSeed(const std::string& text) {
   return seed;
 }
 
-// The keys of a photometry file's numbers, in the file's order after the keys that are converted
-// by hand (name, speckle_model, noise, seed, floor_texture, floor_texture_seed).
+// The keys of a photometry file, in the file's order: first its name and the values converted by
+// hand (an enum by name, a 64-bit seed as a string), then its numbers.
+const Field<Photometry> kHeadKeys[] = {
+    {"name", &Photometry::name},
+    {"speckle_model",
+     Codec<Photometry>{
+         [](const cv::FileNode& node, const char* key, Photometry& p) {
+           std::string model = p.render.speckle_model == SpeckleModel::Gamma ? "gamma" : "gaussian";
+           readField(node, key, model);
+           if (model != "gaussian" && model != "gamma")
+             throw std::invalid_argument("field 'speckle_model' must be gaussian or gamma");
+           p.render.speckle_model = model == "gamma" ? SpeckleModel::Gamma : SpeckleModel::Gaussian;
+         },
+         [](cv::FileStorage& fs, const char* key, const Photometry& p) {
+           fs << key << (p.render.speckle_model == SpeckleModel::Gamma ? "gamma" : "gaussian");
+         }}},
+    {"noise", Codec<Photometry>{[](const cv::FileNode& node, const char* key, Photometry& p) {
+                                  int noise = p.render.noise ? 1 : 0;
+                                  readField(node, key, noise);
+                                  if (noise != 0 && noise != 1)
+                                    throw std::invalid_argument("field 'noise' must be 0 or 1");
+                                  p.render.noise = noise != 0;
+                                },
+                                [](cv::FileStorage& fs, const char* key, const Photometry& p) {
+                                  fs << key << static_cast<int>(p.render.noise);
+                                }}},
+    {"seed", Codec<Photometry>{[](const cv::FileNode& node, const char* key, Photometry& p) {
+                                 std::string seed = std::to_string(p.render.seed);
+                                 readField(node, key, seed);
+                                 p.render.seed = parseSeed(seed);
+                               },
+                               [](cv::FileStorage& fs, const char* key, const Photometry& p) {
+                                 fs << key << std::to_string(p.render.seed);
+                               }}},
+    {"floor_texture",
+     Codec<Photometry>{[](const cv::FileNode& node, const char* key, Photometry& p) {
+                         std::string texture = floorTextureName(p.floor.texture);
+                         readField(node, key, texture);
+                         p.floor.texture = floorTextureFromName(texture);
+                       },
+                       [](cv::FileStorage& fs, const char* key, const Photometry& p) {
+                         fs << key << floorTextureName(p.floor.texture);
+                       }}}};
+const Field<FloorConfig> kTextureSeedKeys[] = {{"floor_texture_seed", &FloorConfig::texture_seed}};
 const Field<RenderConfig> kRenderKeys[] = {{"laser_peak", &RenderConfig::laser_peak},
                                            {"ambient", &RenderConfig::ambient},
                                            {"speckle_contrast", &RenderConfig::speckle_contrast},
@@ -310,6 +352,8 @@ const Field<Photometry> kLensKeys[] = {{"distortion", &Photometry::distortion}};
 // visit(keys, part) for the tables of a photometry file's numbers, in the file's order.
 template <typename P, typename Visit>
 void forEachTable(P& p, Visit&& visit) {
+  visit(kHeadKeys, p);
+  visit(kTextureSeedKeys, p.floor);
   visit(kRenderKeys, p.render);
   visit(kFloorKeys, p.floor);
   visit(kObjectKeys, p);
@@ -321,12 +365,6 @@ void forEachTable(P& p, Visit&& visit) {
 
 void savePhotometry(const Photometry& p, const std::string& path) {
   cv::FileStorage fs = openYamlForWrite(path, "photometry");
-  fs << "name" << p.name;
-  fs << "speckle_model" << (p.render.speckle_model == SpeckleModel::Gamma ? "gamma" : "gaussian");
-  fs << "noise" << static_cast<int>(p.render.noise);
-  fs << "seed" << std::to_string(p.render.seed);
-  fs << "floor_texture" << floorTextureName(p.floor.texture);
-  fs << "floor_texture_seed" << static_cast<double>(p.floor.texture_seed);
   forEachTable(p, [&](const auto& keys, const auto& part) { writeFields(fs, keys, part); });
 }
 
@@ -335,28 +373,11 @@ Photometry loadPhotometry(const std::string& path) {
   const cv::FileNode root = fs.root();
   Photometry p;
   try {
-    std::vector<std::string> known = {"name", "speckle_model", "noise",
-                                      "seed", "floor_texture", "floor_texture_seed"};
+    std::vector<std::string> known;
     forEachTable(p, [&](const auto& keys, auto&) {
       for (std::string& key : keysOf(keys)) known.push_back(std::move(key));
     });
     checkKeys(root, "", known);
-    readField(root, "name", p.name);
-    std::string model = "gaussian", texture = floorTextureName(p.floor.texture);
-    std::string seed = std::to_string(p.render.seed);
-    int noise = 1;
-    readField(root, "speckle_model", model);
-    if (model != "gaussian" && model != "gamma")
-      throw std::invalid_argument("field 'speckle_model' must be gaussian or gamma");
-    p.render.speckle_model = model == "gamma" ? SpeckleModel::Gamma : SpeckleModel::Gaussian;
-    readField(root, "noise", noise);
-    if (noise != 0 && noise != 1) throw std::invalid_argument("field 'noise' must be 0 or 1");
-    p.render.noise = noise != 0;
-    readField(root, "seed", seed);
-    p.render.seed = parseSeed(seed);
-    readField(root, "floor_texture", texture);
-    p.floor.texture = floorTextureFromName(texture);
-    readField(root, "floor_texture_seed", p.floor.texture_seed);
     forEachTable(p, [&](const auto& keys, auto& part) { readFields(root, keys, part); });
     p.validate();
   } catch (const std::invalid_argument& e) {
