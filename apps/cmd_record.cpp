@@ -2,7 +2,7 @@
 // `detect` and a bug report read: PNG frames (8-bit for Mono8, 16-bit for Mono12 and Mono16),
 // frames.csv (each frame's file, stamp and the clock of the stamp), sensor.yaml and, with
 // --calibration, calibration.yaml. Every file is written whole (a temporary file renamed into
-// place); Ctrl-C ends at a frame boundary with frames.csv complete.
+// place), frames.csv a whole row after each frame: it always lists the frames on disk.
 #include "camera_options.h"
 #include "cli.h"
 #include "commands.h"
@@ -121,8 +121,9 @@ int runRecord(int argc, char** argv) {
       "Saves what a live camera sends as a recording that map --sequence and detect read:\n"
       "PNG frames (8-bit for Mono8, 16-bit for Mono12 and Mono16), frames.csv (each frame's\n"
       "file, stamp_us and the clock of the stamp: camera or host), sensor.yaml and, with\n"
-      "--calibration, calibration.yaml, each written whole. Ctrl-C ends the recording at a\n"
-      "frame boundary with every file complete. Replay it with\n"
+      "--calibration, calibration.yaml, each written whole; frames.csv grows a row after each\n"
+      "frame, so it lists the frames on disk however the recording ends. Ctrl-C ends it at a\n"
+      "frame boundary. Replay it with\n"
       "  multislit map --sequence DIR --calibration DIR/calibration.yaml --out out/map\n"
       "Example: multislit record --camera 192.168.1.20 --calibration calib.yaml \\\n"
       "             --sensor sensor.yaml --seconds 60 --exposure 2000 --out run1");

@@ -150,4 +150,18 @@ interrupt calibrate 0.2 "$M" calibrate "${references[@]}" --out ci.yaml
 grep -q "calibrate: interrupted" calibrate.log || fail "calibrate: no word of the interruption"
 [[ ! -e ci.yaml && -z $(find . -name '.ci.yaml.part*') ]] || fail "calibrate wrote after SIGINT"
 echo "table1, bench, calibrate: interrupted, nothing written"
+# A recording killed outright (SIGKILL: no handler runs): frames.csv lists the frames whole on disk
+# (the last PNG may be there without its row), and the recording replays.
+"$M" walk --frames 100000 --record rk --out rkw >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 1 600); do [[ -e rk/frame_000004.png ]] && break; sleep 0.1; done
+kill -9 "$pid"
+wait "$pid" 2>/dev/null
+whole_lines rk/frames.csv 4
+rows=$(($(wc -l <rk/frames.csv) - 1))
+pngs=$(ls rk/frame_*.png | wc -l)
+((rows >= 4 && (rows == pngs || rows == pngs - 1))) || fail "killed: $rows rows for $pngs PNGs"
+"$M" map --sequence rk --calibration rk/calibration.yaml --out rkm >rkm.log 2>&1 ||
+  fail "the killed recording does not replay: $(tail -3 rkm.log)"
+echo "walk --record: killed after $pngs frames, frames.csv lists $rows and replays"
 echo "outputs_check: all checks passed"
