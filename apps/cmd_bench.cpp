@@ -1,5 +1,5 @@
 // multislit bench: the time of every stage of the pipeline on one core, against the stock PCL
-// path on the same frames (issue 7), with the agreement of the two paths' detections.
+// path on the same frames, with the agreement of the two paths' detections.
 #include "bench_input.h"
 #include "bench_plain.h"
 #include "bench_render.h"

@@ -106,7 +106,7 @@ constexpr std::size_t kTimed = 5;  // images timed by --ahead auto
 
 // --ahead auto: enough images that the demo's walk (kWalkFrames) comes at `fps` without a late
 // one, from the time the first images took to make, half as many again to spare (a client on the
-// same machine slows the making: map --camera, 45 -> 54 ms an image on 2 cores), at most the
+// same machine slows the making: map --camera, by a fifth on 2 cores), at most the
 // walk; CameraEmulator::kDefaultAhead when the making keeps up.
 std::size_t autoAhead(const CameraEmulator& camera, double fps, std::size_t limit) {
   const auto start = std::chrono::steady_clock::now();

@@ -34,8 +34,7 @@ const Command kCommands[] = {
      multislit::apps::runDetect},
     {"table1", "reproduce Table I and Fig. 12: floor residual std at the seven poses",
      multislit::apps::runTable1},
-    {"bench", "time every stage on one core against the stock PCL path (issue 7)",
-     multislit::apps::runBench},
+    {"bench", "time every stage on one core against the stock PCL path", multislit::apps::runBench},
 };
 
 void printUsage(std::ostream& out) {

@@ -1,4 +1,4 @@
-// The slits of a reference image as one pattern (issue 13): one projector casts them all, so on a
+// The slits of a reference image as one pattern: one projector casts them all, so on a
 // plane their courses change smoothly from slit to slit as well as along each slit. A stretch of
 // one slit that a dark grout line, a stain or a grain running along it has pulled sideways (by
 // pixels, over a hundred rows) is a smooth curve of its own, which that slit's polynomial alone

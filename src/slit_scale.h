@@ -1,4 +1,4 @@
-// Points off the floor at longer scales along a slit (issue 13): an object lifts a run of
+// Points off the floor at longer scales along a slit: an object lifts a run of
 // neighbouring rows of one slit, noise is correlated only over a speckle grain, so the median
 // residual of a window of rows sees a shift that no single point shows above the frame's noise.
 // Private to the library: FloorDetector's step 6.
