@@ -83,11 +83,10 @@ TEST(ReferenceBuild, AStrayPieceAtASlitsEndDoesNotBendTheSlit) {
 
 // A grout line running along a stripe moves its centre by pixels over a hundred rows or more, and
 // that slit's own polynomial follows it; the other slits of the pattern show where it lies
-// (slit_pattern.h). Over the nine tiled floors of the 40 random photometries whose speckle is
-// under 0.3 (one image each, at the reference pose), the rows more than 0.5 px off fell from 704
-// of 39 079 (1.8 %) to 177 of 38 933 (0.45 %) when the pattern judged the slits' centres, the
-// 99th percentile of the error from 0.97 to 0.37 px (variant 15: 308 to 151 rows, 36: 206 to
-// none; under the sanitizers, which build only those two, 514 of 8768 to 151 of 8758).
+// (slit_pattern.h). Judged over the nine tiled floors of the 40 random photometries whose speckle
+// is under 0.3 (one image each, at the reference pose; only variants 15 and 36 under the
+// sanitizers): at most 1 % of the rows more than 0.5 px off (3 % under the sanitizers), the 99th
+// percentile of the error under 0.5 px.
 TEST(ReferenceBuild, AStretchPulledAlongAGroutLineIsHeldByTheOtherSlits) {
   std::size_t beyond = 0, rows = 0;
   std::vector<double> all;

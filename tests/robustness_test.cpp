@@ -18,25 +18,11 @@ using namespace multislit::robustness;
 // What holds today is asserted; the targets that do not (recall of >= 5 mm crossings
 // 0.98 and false points 0.1 % over every photometry) are printed and left to the table of
 // docs/accuracy.md.
-// The slit's centre is measured across the stripe (ExtractorConfig::across_stripe), not along
-// the row, which the rotated camera lays nearly along it: a tile's edge or grout crossing the
-// stripe no longer moves the centre by pixels, and the reference's slits are fitted robustly (a
-// piece of something else at a slit's end pulled whole slits by up to 68 px). With both, the
-// false points over the 40 fell from 4.22 % to 1.77 % of valid (the paper's method 17.4 %) and
-// the frames that measure the paper's sigma (<= 0.35 px) grew from 30 to 58 of the 80, for the
-// recall 0.808 -> 0.819. The extractor's contrast limit then went from the paper's 0.06 to 0.03
-// of full scale (a dark cable under a weak laser was not measured at all): recall 0.819 -> 0.891,
-// false points 1.77 -> 1.74 %, valid points 348 964 -> 351 122 (the paper's method 350 969); the
-// laser-off test below holds at 0.03. The reference's slits judged as one pattern (a stretch of
-// one slit that grout pulled sideways is held by the others, slit_pattern.h): false points
-// 1.73 -> 1.49 % (quiet frames 1.49 -> 1.24 %), recall 0.892 (one crossing fewer), valid points
-// 351 208 -> 350 751. What is left (per draw of the 40, over 20 draws): 75 of the
-// ~930 >= 5 mm crossings missed on cables (19 never measured, 55 measured within the threshold of
-// the floor), 20 on balls (7 and 14). Where a cable runs nearly along a slit (variants 18 and 38)
-// the sheet's thickness blends its flank with the floor, so the measured shift is a third of the
-// true one; strong speckle (sigma at its 1 px bound) hides the 7 mm cable under the threshold;
-// and grout lines or grain running along a stripe darken one flank of it over dozens of rows as
-// an object would shift it (tiles of variant 36: 8 of the ~18 false groups on empty floors).
+// What limits it (the figures: docs/accuracy.md): where a cable runs nearly along a slit
+// (variants 18 and 38) the sheet's thickness blends its flank with the floor, so the measured shift
+// is a third of the true one; strong speckle (sigma at its 1 px bound) hides the 7 mm cable under
+// the threshold; and grout lines or grain running along a stripe darken one flank of it over
+// dozens of rows as an object would shift it (tiles of variant 36).
 TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   const int variants = frameCount(40, 8), realizations = frameCount(2, 1);
   Tally all, quiet, middle, noisy;  // quiet: sigma is the paper's 0.3 px or near it
