@@ -53,13 +53,12 @@ struct PlaneObservation {
   }
 };
 
-/// A plane image's slit through the lens: each recorded point's ideal (undistorted) pixel, NaN
-/// where the slit has no point.
-std::vector<Eigen::Vector2d> idealSlit(const Lens& lens, const ReferenceSlit& p) {
+/// A plane image's slit through `ref`'s lens: each recorded point's ideal pixel
+/// (Reference::idealPoint), NaN where the slit has no point.
+std::vector<Eigen::Vector2d> idealSlit(const Reference& ref, const ReferenceSlit& p) {
   std::vector<Eigen::Vector2d> ideal(p.u.size(), Eigen::Vector2d::Constant(kNaN));
   for (std::size_t k = 0; k < p.u.size(); ++k)
-    if (std::isfinite(p.u[k]))
-      ideal[k] = lens.undistort({p.u[k], p.first_row + static_cast<double>(k)});
+    if (std::isfinite(p.u[k])) ideal[k] = ref.idealPoint(p, k);
   return ideal;
 }
 
@@ -91,7 +90,7 @@ std::vector<PlaneObservation> observeOnPlanes(const Reference& ref,
   std::vector<std::vector<std::vector<Eigen::Vector2d>>> ideal_seen(seen.size());
   if (ideal)
     for (std::size_t k = 0; k < seen.size(); ++k)
-      for (const ReferenceSlit& p : seen[k]) ideal_seen[k].push_back(idealSlit(ref.lens, p));
+      for (const ReferenceSlit& p : seen[k]) ideal_seen[k].push_back(idealSlit(ref, p));
   std::vector<PlaneObservation> obs;
   for (std::size_t s = 0; s < ref.slits.size(); ++s)
     for (std::size_t r = 0; r < ref.slits[s].u.size(); ++r) {
