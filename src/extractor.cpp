@@ -11,6 +11,8 @@ namespace multislit {
 
 namespace {
 
+constexpr std::size_t kAhead = 8;  // batches of regions prefetched ahead
+
 /// du/dv of a reference slit at row k: the central difference over up to two rows each side
 /// where it has points (the reference's centres are smoothed along the slit). 0: none.
 double slopeAt(const std::vector<float>& u, std::size_t k) {
@@ -71,6 +73,11 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
   std::sort(tasks_.begin(), tasks_.end(), [](const Task& a, const Task& b) {
     return a.row != b.row ? a.row < b.row : a.first < b.first;
   });
+  along_slits_.resize(tasks_.size());
+  for (std::uint32_t i = 0; i < tasks_.size(); ++i) along_slits_[i] = i;
+  std::sort(along_slits_.begin(), along_slits_.end(),
+            [this](std::uint32_t a, std::uint32_t b) { return tasks_[a].cell < tasks_[b].cell; });
+
   if (reference_.lens.distorted()) prepareIdeal();
 }
 
@@ -158,14 +165,14 @@ bool Extractor::finishIdeal(const Task& t, double centre, PointRDM* p) const {
 }
 
 bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
-                       const ProfileParams& params, PointRDM* p) const {
+                       const ProfileParams& params, PointRDM* p, AcrossColumns* shared) const {
   if (config_.across_stripe) {
     AcrossStripe across;  // the row's tests, applied to the columns' profiles
     across.min_contrast = params.min_contrast;
     across.fit_threshold = params.fit_threshold;
     across.max_move = params.half_window;
     across.half_rows = acrossHalfRows(params.half_window, t.slope);
-    acrossStripeCentre(image, t.row, centre, t.slope, across, &centre);
+    acrossStripeCentre(image, t.row, centre, t.slope, across, &centre, shared);
   }
   // The image spans columns -0.5 to cols - 0.5 (pixel centres at whole numbers).
   if (!(centre > -0.5 && centre < image.cols - 0.5)) return false;
@@ -185,7 +192,11 @@ bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
 template <typename T>
 void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
-  PointRDM* points = cloud.points.data();
+  // First every row's profile, top to bottom (the image is read once, in order); then each slit's
+  // points in order along it, so that the columns measured across the stripe for one point serve
+  // the next (AcrossColumns).
+  thread_local std::vector<double> centres;
+  centres.assign(tasks_.size(), std::numeric_limits<double>::quiet_NaN());
   constexpr std::size_t kBatch = 8;  // regions measured per call
   PeakRegion<T> regions[kBatch];
   Peak peaks[kBatch];
@@ -195,24 +206,35 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
     const Task* tasks = tasks_.data() + begin;
     for (std::size_t i = 0; i < n; ++i)
       regions[i] = {image.ptr<T>(tasks[i].row), tasks[i].first, tasks[i].last};
-    // A new frame is in memory, not in the cache: ask for the regions kAhead batches on now, so
-    // that they arrive while these are measured.
-    constexpr std::size_t kAhead = 8;
-    const std::size_t ahead = begin + kAhead * kBatch;
-    for (std::size_t i = ahead; i < std::min(ahead + kBatch, tasks_.size()); ++i) {
-      const Task& next = tasks_[i];
-      const auto* row = reinterpret_cast<const char*>(image.ptr<T>(next.row));
-      const int first = std::max(next.first, 0) * static_cast<int>(sizeof(T));
-      const int last = std::min(next.last, image.cols - 1) * static_cast<int>(sizeof(T));
-      if (first > last) continue;
-      for (int byte = first; byte < last + 64; byte += 64)
-        __builtin_prefetch(row + std::min(byte, last));
-    }
+    prefetchRegions<T>(image, begin + kAhead * kBatch, kBatch);
     measurePeaks(regions, n, image.cols, params, peaks, found);
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!found[i]) continue;
-      if (finish(image, tasks[i], peaks[i].centre, params, &points[tasks[i].cell])) ++stats.valid;
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (found[i]) centres[begin + i] = peaks[i].centre;
+  }
+  PointRDM* points = cloud.points.data();
+  AcrossColumns shared;
+  std::uint32_t slit = std::numeric_limits<std::uint32_t>::max();
+  const auto width = static_cast<std::uint32_t>(cloud.width);
+  for (const std::uint32_t i : along_slits_) {
+    const Task& t = tasks_[i];
+    if (!std::isfinite(centres[i])) continue;
+    if (t.cell / width != slit) slit = t.cell / width, shared.clear();
+    if (finish(image, t, centres[i], params, &points[t.cell], &shared)) ++stats.valid;
+  }
+}
+
+template <typename T>
+void Extractor::prefetchRegions(const cv::Mat& image, std::size_t begin, std::size_t count) const {
+  // A new frame is in memory, not in the cache: ask for regions some batches ahead, so that they
+  // arrive while the batch before them is measured.
+  for (std::size_t i = begin; i < std::min(begin + count, tasks_.size()); ++i) {
+    const Task& next = tasks_[i];
+    const auto* row = reinterpret_cast<const char*>(image.ptr<T>(next.row));
+    const int first = std::max(next.first, 0) * static_cast<int>(sizeof(T));
+    const int last = std::min(next.last, image.cols - 1) * static_cast<int>(sizeof(T));
+    if (first > last) continue;
+    for (int byte = first; byte < last + 64; byte += 64)
+      __builtin_prefetch(row + std::min(byte, last));
   }
 }
 

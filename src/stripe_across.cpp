@@ -15,21 +15,22 @@ namespace {
 constexpr int kLanes = 8;     // columns measured together (7 used with half_columns = 3)
 constexpr int kMaxRows = 32;  // longest column profile [px]
 
-/// The natural logarithm for x > 0 (float, to about 1e-7 relative), written so that a loop over
-/// lanes vectorizes: x = m 2^e with m in [sqrt(1/2), sqrt(2)), ln m = 2 atanh((m - 1) / (m + 1)).
+/// ln(x) of a normal float x > 0 to within 4e-7, without a division, written so that a loop over
+/// lanes vectorizes: x = 2^e m with m in [sqrt(1/2), sqrt(2)), f = m - 1, ln x = e ln 2 + f +
+/// f^2 q(f), q the degree-6 polynomial of the row's eight-lane fit (slit_profile_eight.cpp),
+/// summed in pairs of terms.
 inline float lanesLog(float x) {
-  std::uint32_t bits;
+  std::int32_t bits;
   std::memcpy(&bits, &x, sizeof bits);
-  const std::uint32_t mantissa = (bits & 0x007fffffu) | 0x3f800000u;  // m in [1, 2)
+  const std::int32_t e = (bits - 0x3f3504f3) >> 23;  // the borrow picks m's interval
+  const std::int32_t m_bits = bits - static_cast<std::int32_t>(static_cast<std::uint32_t>(e) << 23);
   float m;
-  std::memcpy(&m, &mantissa, sizeof m);
-  float e = static_cast<float>(static_cast<int>((bits >> 23) & 0xffu) - 127);
-  const bool high = m > 1.41421356f;
-  m = high ? 0.5f * m : m;
-  e = high ? e + 1.0f : e;
-  const float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
-  const float series = 1.0f + s2 * (1.0f / 3 + s2 * (1.0f / 5 + s2 * (1.0f / 7 + s2 * (1.0f / 9))));
-  return e * 0.693147181f + 2.0f * s * series;
+  std::memcpy(&m, &m_bits, sizeof m);
+  const float f = m - 1.0f, f2 = f * f, f4 = f2 * f2;
+  const float q01 = 0.333341136f * f - 0.500000912f, q23 = 0.199290571f * f - 0.249824512f;
+  const float q456 = -0.101885865f * f2 + (0.15984096f * f - 0.171323873f);
+  const float q = f4 * q456 + (f2 * q23 + q01);
+  return static_cast<float>(e) * 0.693147181f + (f2 * q + f);
 }
 
 /// The columns' profiles, row i of column j at v[i][j], and the sums of each column's fit.
@@ -71,10 +72,10 @@ MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold
   // the first to the last that does are summed, in the same order, so the sums are the same bits.
   int begin = count, end = 0;
   for (int i = 0; i < count; ++i) {
-    bool above = false;
-    for (int j = 0; j < kLanes; ++j) above = above || c.v[i][j] > limit[j];
-    begin = above ? std::min(begin, i) : begin;
-    end = above ? i + 1 : end;
+    int above = 0;  // without a branch: whether a row holds the stripe is hard to predict
+    for (int j = 0; j < kLanes; ++j) above |= c.v[i][j] > limit[j] ? 1 : 0;
+    begin = std::min(begin, above ? i : count);
+    end = std::max(end, above * (i + 1));
   }
   for (int i = begin; i < end; ++i) {
     const float d = static_cast<float>(i) - half, d2 = d * d;
@@ -104,45 +105,82 @@ MULTISLIT_AVX2_CLONES void columnOffsets(const Columns& c, double* out) {
   }
 }
 
+/// Fills lane j of `cols` with column x0 + j (lanes [0, lanes)), its profile starting where the
+/// stripe through (`c`, `row`) of direction `slope` should cross it, `h` rows above; records each
+/// lane's first row (cols.used is 0 where the column's window leaves the image: an empty lane).
+/// Fills lane j of `cols` with column x0 + j (lanes [0, lanes)), its profile starting where the
+/// stripe through (`c`, `row`) of direction `slope` should cross it, `h` rows above; records each
+/// lane's first row (cols.used is 0 where the column's window leaves the image: an empty lane).
+template <typename T>
+void placeColumns(const cv::Mat& image, int row, double c, double slope, int h, long x0, int lanes,
+                  Columns& cols, long* first_row) {
+  const int count = 2 * h + 1;
+  const double per_column = 1.0 / slope;
+  for (int j = 0; j < kLanes; ++j)
+    first_row[j] = std::lround(row + (static_cast<double>(x0 + j) - c) * per_column) - h;
+  const std::size_t step = image.step1();
+  for (int j = 0; j < kLanes; ++j) {
+    const long x = x0 + j, lo = first_row[j];
+    const bool inside =
+        j < lanes && x >= 0 && x < image.cols && lo >= 0 && lo + count <= image.rows;
+    cols.used[j] = inside ? 1.0f : 0.0f;
+    if (!inside) {
+      for (int i = 0; i < count; ++i) cols.v[i][j] = 0;
+      continue;
+    }
+    const T* pixel = image.ptr<T>(static_cast<int>(lo)) + x;
+    for (int i = 0; i < count; ++i) cols.v[i][j] = static_cast<float>(pixel[i * step]);
+  }
+}
+
+/// Measures columns x0 .. x0 + lanes - 1 (placed as placeColumns() does) into `out`.
+template <typename T>
+void measureColumns(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p,
+                    long x0, int lanes, AcrossColumn* out) {
+  const int h = p.half_rows;
+  Columns cols;
+  long first_row[kLanes];
+  placeColumns<T>(image, row, c, slope, h, x0, lanes, cols, first_row);
+  sumColumns(cols, 2 * h + 1, static_cast<float>(p.fit_threshold));
+  alignas(32) double offsets[kLanes];
+  columnOffsets(cols, offsets);
+  for (int j = 0; j < lanes; ++j) {
+    AcrossColumn& m = out[j];
+    m.x = x0 + j, m.first_row = first_row[j], m.half_rows = h;
+    m.usable = cols.used[j] > 0 && cols.top[j] >= p.min_contrast && cols.sum[j] > 0;
+    m.weight = m.usable ? cols.sum[j] : 0.0;
+    m.moment_x = m.weight * static_cast<double>(m.x);
+    m.moment_y = m.usable ? m.weight * (static_cast<double>(first_row[j]) + h + offsets[j]) : 0.0;
+  }
+}
+
 template <typename T>
 bool across(const cv::Mat& image, int row, double start, double slope, const AcrossStripe& p,
-            double* out) {
-  const int h = p.half_rows, count = 2 * h + 1;
-  if (count > kMaxRows || 2 * p.half_columns + 1 > kLanes) return false;
-  Columns cols;
-  long first_row[kLanes] = {};
+            AcrossColumns* shared, double* out) {
+  const int count = 2 * p.half_rows + 1, columns_used = 2 * p.half_columns + 1;
+  if (count > kMaxRows || columns_used > kLanes) return false;
+  AcrossColumn own[kLanes];
   double c = start;
   for (int pass = 0; pass < 2; ++pass) {
     const long x0 = std::lround(c) - p.half_columns;
-    for (int j = 0; j < kLanes; ++j) {  // each column from where the stripe should cross it
-      const long x = x0 + j;
-      const long lo = std::lround(row + (static_cast<double>(x) - c) / slope) - h;
-      const bool inside = j <= 2 * p.half_columns && x >= 0 && x < image.cols && lo >= 0 &&
-                          lo + count <= image.rows;
-      cols.used[j] = inside ? 1.0f : 0.0f;
-      first_row[j] = lo;
-      if (!inside) {
-        for (int i = 0; i < count; ++i) cols.v[i][j] = 0;
-        continue;
-      }
-      const T* pixel = image.ptr<T>(static_cast<int>(lo)) + x;
-      const std::size_t step = image.step1();
-      for (int i = 0; i < count; ++i) cols.v[i][j] = static_cast<float>(pixel[i * step]);
+    const AcrossColumn* measured[kLanes];
+    if (shared == nullptr) {  // this point's own columns
+      measureColumns<T>(image, row, c, slope, p, x0, columns_used, own);
+      for (int j = 0; j < columns_used; ++j) measured[j] = &own[j];
+    } else {
+      shared->gather<T>(image, row, c, slope, p, x0, columns_used, measured);
     }
-    sumColumns(cols, count, static_cast<float>(p.fit_threshold));
-    alignas(32) double offsets[kLanes];
-    columnOffsets(cols, offsets);
-    double weight = 0, sum = 0;
+    // The signal-weighted mean of the columns' crossings, each carried back to `row` along the
+    // stripe: x + slope (row - y).
+    double weight = 0, moment_x = 0, moment_y = 0;
     int columns = 0;
-    for (int j = 0; j < kLanes; ++j) {
-      if (!(cols.top[j] >= p.min_contrast) || !(cols.sum[j] > 0)) continue;
-      const double y = static_cast<double>(first_row[j]) + h + offsets[j];
-      sum += cols.sum[j] * (static_cast<double>(x0 + j) + slope * (row - y));
-      weight += cols.sum[j];
-      ++columns;
+    for (int j = 0; j < columns_used; ++j) {
+      const AcrossColumn& m = *measured[j];
+      weight += m.weight, moment_x += m.moment_x, moment_y += m.moment_y;
+      columns += m.usable;
     }
     if (columns <= p.half_columns) return false;  // more than half the columns must see it
-    const double moved = sum / weight - c;
+    const double moved = (moment_x + slope * (row * weight - moment_y)) / weight - c;
     c += moved;
     if (!(std::abs(c - start) <= p.max_move)) return false;
     if (std::abs(moved) < 1.0) break;  // the columns' crossings hardly change: done
@@ -153,11 +191,52 @@ bool across(const cv::Mat& image, int row, double start, double slope, const Acr
 
 }  // namespace
 
+template <typename T>
+void AcrossColumns::gather(const cv::Mat& image, int row, double c, double slope,
+                           const AcrossStripe& p, long x0, int columns, const AcrossColumn** out) {
+  const int h = p.half_rows;
+  // A column is reused when it was measured with a window within a row of where this point
+  // would place it: the stripe lies well inside either window.
+  const double per_column = 1.0 / slope;
+  auto cached = [&](long x) -> const AcrossColumn* {
+    const AcrossColumn& m = slots_[static_cast<std::size_t>(x) & (kSlots - 1)];
+    const long lo = std::lround(row + (static_cast<double>(x) - c) * per_column) - h;
+    const bool same = m.x == x && m.half_rows == h && std::abs(m.first_row - lo) <= 1;
+    return same ? &m : nullptr;
+  };
+  long first_missing = 0, last_missing = -1;
+  bool missing = false;
+  for (int j = 0; j < columns; ++j) {
+    if (cached(x0 + j)) continue;
+    if (!missing) first_missing = x0 + j;
+    last_missing = x0 + j, missing = true;
+  }
+  if (missing) {
+    // The slit's next points lie towards larger columns where it descends to the right
+    // (du/dv > 0): measure eight columns from the first missing one on that side.
+    const long batch = slope > 0 ? first_missing : last_missing - (kLanes - 1);
+    AcrossColumn fresh[kLanes];
+    measureColumns<T>(image, row, c, slope, p, batch, kLanes, fresh);
+    for (int j = 0; j < kLanes; ++j)
+      slots_[static_cast<std::size_t>(batch + j) & (kSlots - 1)] = fresh[j];
+  }
+  for (int j = 0; j < columns; ++j)
+    out[j] = &slots_[static_cast<std::size_t>(x0 + j) & (kSlots - 1)];
+}
+
+template void AcrossColumns::gather<std::uint8_t>(const cv::Mat&, int, double, double,
+                                                  const AcrossStripe&, long, int,
+                                                  const AcrossColumn**);
+template void AcrossColumns::gather<std::uint16_t>(const cv::Mat&, int, double, double,
+                                                   const AcrossStripe&, long, int,
+                                                   const AcrossColumn**);
+
 bool acrossStripeCentre(const cv::Mat& image, int row, double centre, double slope,
-                        const AcrossStripe& params, double* out) {
+                        const AcrossStripe& params, double* out, AcrossColumns* shared) {
   if (!(std::abs(slope) >= kAcrossMinSlope) || params.half_rows < 2) return false;
-  return image.depth() == CV_8U ? across<std::uint8_t>(image, row, centre, slope, params, out)
-                                : across<std::uint16_t>(image, row, centre, slope, params, out);
+  return image.depth() == CV_8U
+             ? across<std::uint8_t>(image, row, centre, slope, params, shared, out)
+             : across<std::uint16_t>(image, row, centre, slope, params, shared, out);
 }
 
 }  // namespace multislit

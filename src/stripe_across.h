@@ -19,6 +19,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 
 namespace multislit {
 
@@ -40,10 +42,45 @@ inline int acrossHalfRows(double row_half_window, double slope) {
   return 1 + static_cast<int>(std::ceil(row_half_window / std::max(1.0, std::abs(slope))));
 }
 
+/// One column's crossing of the stripe, as measured for some point of a slit.
+struct AcrossColumn {
+  static constexpr long kNone = std::numeric_limits<long>::min();  ///< x of an empty slot
+  long x;                                                          ///< image column [px]
+  long first_row;   ///< first row of the window centred on its expected crossing [px]
+  int half_rows;    ///< rows each side of the expected crossing [px]
+  bool usable;      ///< inside the image, its contrast at least the limit, some signal
+  double weight;    ///< its signal above the fit limit (0 unless usable)
+  double moment_x;  ///< weight times its column
+  double moment_y;  ///< weight times the row where the stripe crosses it
+};
+
+/// The columns measured for the points of one slit, reused by its next points: neighbouring
+/// points of a slit (rows k and k + 1) measure columns about |du/dv| apart, so seven columns a
+/// point share four or five with the next. Measured eight at a time, ahead along the slit; a
+/// column is reused when its profile was placed within a row of where this point places it.
+/// clear() before each slit and each image.
+class AcrossColumns {
+ public:
+  AcrossColumns() { clear(); }
+  void clear() {
+    for (AcrossColumn& m : slots_) m.x = AcrossColumn::kNone;
+  }
+  /// `columns` columns from x0 on, measured for the stripe through (`c`, `row`) of direction
+  /// `slope` with `p`'s window and limits: the cached ones where placed alike, the others now.
+  template <typename T>
+  void gather(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p, long x0,
+              int columns, const AcrossColumn** out);
+
+ private:
+  static constexpr std::size_t kSlots = 32;  ///< a power of two over a point's columns and a batch
+  AcrossColumn slots_[kSlots];
+};
+
 /// The column where the stripe through (`centre`, `row`) of direction `slope` (du/dv) crosses
 /// `row`, measured from the columns' profiles of `image` (CV_8U or CV_16U). False, leaving
-/// `*out` alone, when too few columns show the stripe inside the image.
+/// `*out` alone, when too few columns show the stripe inside the image. With `shared`, the columns
+/// come from and go to it (the extractor's points of one slit, in order along it).
 bool acrossStripeCentre(const cv::Mat& image, int row, double centre, double slope,
-                        const AcrossStripe& params, double* out);
+                        const AcrossStripe& params, double* out, AcrossColumns* shared = nullptr);
 
 }  // namespace multislit

@@ -13,6 +13,8 @@
 
 namespace multislit {
 
+class AcrossColumns;
+
 struct ExtractorConfig {
   Estimator estimator = Estimator::Gaussian;  ///< measured: docs/sensor-and-calibration.md
   /// Slit peak above its background [full scale]: half the paper's 0.06, so that a dark object
@@ -93,10 +95,11 @@ class Extractor {
   };
 
   /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
-  /// (ExtractorConfig::across_stripe), then dk and, with a metric scale, x, y, z. False, and `p`
-  /// left unmeasured, when the centre lies beyond the image's edge (a fit pulled past it).
+  /// (ExtractorConfig::across_stripe; the columns shared along the slit through `shared`), then dk
+  /// and, with a metric scale, x, y, z. False, and `p` left unmeasured, when the centre lies beyond
+  /// the image's edge (a fit pulled past it).
   bool finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
-              PointRDM* p) const;
+              PointRDM* p, AcrossColumns* shared) const;
   /// finish()'s last step through a distorting lens: the centre on task t's recorded row to
   /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
   /// the reference slit's ends.
@@ -104,12 +107,15 @@ class Extractor {
   /// Each task's IdealTask.
   void prepareIdeal();
   template <typename T>
+  void prefetchRegions(const cv::Mat& image, std::size_t begin, std::size_t count) const;
+  template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
 
   Reference reference_;
   ExtractorConfig config_;
   std::vector<Task> tasks_;  ///< by image row, then column: the image is read top to bottom once
+  std::vector<std::uint32_t> along_slits_;       ///< tasks_ by cell: slit by slit, along each
   std::vector<IdealTask> ideal_tasks_;           ///< distorting lens only
   pcl::PointCloud<PointRDM>::VectorType blank_;  ///< the cloud before anything is measured
 };
