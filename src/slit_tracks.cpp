@@ -238,16 +238,22 @@ double imageNoise(const cv::Mat& image) {
 
 namespace {
 
+/// Noise of a pixel that the contrast limit stands above: first kNoiseSigmas[0], then, where that
+/// finds fewer slits than the projector casts (a dim laser on a dark floor), kNoiseSigmas[1]. The
+/// profiles are smoothed along the row over 0.4 stripe widths, which leaves a few times less noise
+/// than a pixel has, so the second is still well above the smoothed profile's noise.
+constexpr double kNoiseSigmas[2] = {8.0, 4.0};
+
 DetectedSlits detectSlitsInRange(const cv::Mat& image, const ReferenceConfig& config,
-                                 const std::string& what) {
+                                 const std::string& what, double noise_sigmas) {
   // The image in 16-bit DN (an 8-bit image times 257), so that smoothing keeps its fractions.
   const double to16 = image.depth() == CV_8U ? 257.0 : 1.0;
   // The contrast limit: the configured one, or lower where the image is clean enough that
-  // kNoiseSigmas of its noise are less (a dim laser on a dark floor), never below kLowest.
-  constexpr double kNoiseSigmas = 8.0, kLowest = 0.015;
+  // noise_sigmas of its noise are less (a dim laser on a dark floor), never below kLowest.
+  constexpr double kLowest = 0.015;
   const double min_contrast =
       std::min(config.min_contrast,
-               std::max(kLowest, kNoiseSigmas * imageNoise(image) * to16 / 65535.0)) *
+               std::max(kLowest, noise_sigmas * imageNoise(image) * to16 / 65535.0)) *
       65535.0;
   const double width = stripeWidth(image, min_contrast / to16);
   DetectedSlits out;
@@ -300,8 +306,17 @@ DetectedSlits detectSlitsInRange(const cv::Mat& image, const ReferenceConfig& co
 
 DetectedSlits detectSlits(const cv::Mat& input, const ReferenceConfig& config,
                           const std::string& what) {
+  const cv::Mat image = toFullRange(input, config.full_scale);
   try {
-    return detectSlitsInRange(toFullRange(input, config.full_scale), config, what);
+    try {
+      return detectSlitsInRange(image, config, what, kNoiseSigmas[0]);
+    } catch (const std::runtime_error& first) {
+      try {  // dim slits: a lower limit; if that fails as well, the first attempt's error
+        return detectSlitsInRange(image, config, what, kNoiseSigmas[1]);
+      } catch (const std::runtime_error&) {
+        throw first;
+      }
+    }
   } catch (const std::runtime_error& e) {
     const std::string hint = fullScaleHint(input, config);
     if (hint.empty()) throw;

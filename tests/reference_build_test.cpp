@@ -147,3 +147,22 @@ TEST(ReferenceBuild, TheMeanOfFiveImagesOfAGrainedFloorIsNotJoinedToItsGrain) {
   EXPECT_LT(e.worst_slit, 1.0);
   EXPECT_LT(quantile(e.all, 0.99), 0.3);
 }
+
+// The dark-floor preset (albedo 0.25, a dim laser, 8 bits): the stripes of the two lowest slits
+// stand 4 to 8 times the pixel noise above the floor, under the first contrast limit (8 times it).
+// Where that limit finds fewer slits than the projector casts, the second (4 times it) finds all
+// 15 from one image, and they lie on the truth.
+TEST(ReferenceBuild, DimSlitsOnADarkFloorAreFoundFromOneImage) {
+  Scene bare;
+  const RenderConfig render = applyPhotometry(photometryPreset("dark-floor"), bare);
+  const Simulator sim(SensorConfig{}, render);
+  const RenderedFrame f = sim.renderReference(bare, tableIPose(0));
+  Reference ref;
+  ASSERT_NO_THROW(ref = Reference::fromImage(f.image));
+  const ReferenceErrors e = errorsOf(ref, f.truth);
+  printErrors("dark-floor, one image", e);
+  EXPECT_EQ(ref.slits.size(), 15u);
+  EXPECT_GT(e.all.size(), f.truth.size() * 98 / 100);
+  EXPECT_LT(quantile(e.all, 0.99), 0.3);
+  EXPECT_LT(e.worst_slit, 1.0);
+}
