@@ -1,0 +1,42 @@
+// The sorted blocks of the slits of an organized grid of residuals, for the medians of windows
+// along the slits at doubling lengths: the window of 2 half + 1 cells centred on cell
+// m (half + 1) is block m of half + 1 cells and block m - 1 without its first cell, and a block
+// of the next length, 2 (half + 1) cells, is two adjacent blocks of this one. So each cell is
+// sorted once, in blocks of the shortest length, and every longer block and every window is a
+// merge of two sorted blocks. Private to the library: FloorDetector's step 6 (slit_scale.cpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace multislit::detail {
+
+class SlitBlocks {
+ public:
+  /// Sorts the blocks of `stride` cells of every slit of `cells` (rows of `width` cells, NaN
+  /// where there is no candidate; a block holds the others). `cells` must stay unchanged while
+  /// this is used.
+  void start(const std::vector<float>& cells, std::size_t width, std::size_t stride);
+
+  /// Appends to `out`, slit by slit, the |median| of each window of 2 stride - 1 cells centred on
+  /// a candidate cell m stride that holds at least stride candidates: the value at position n / 2
+  /// of its n candidates in ascending order, for an even n the mean of it and the one before.
+  /// Then moves on to blocks of 2 stride cells.
+  void mediansThenDouble(std::vector<float>& out);
+
+ private:
+  void sortRow(std::size_t row);
+  void rowMedians(std::size_t row, std::vector<float>& out);
+
+  const float* cells_ = nullptr;
+  std::size_t rows_ = 0, width_ = 0, stride_ = 0;
+  std::size_t blocks_ = 0;  // blocks per slit
+  std::size_t cap_ = 0;     // floats per block: a power of two >= 4, >= stride_
+  // Block m of slit s at (s blocks_ + m) cap_: its candidates ascending, then +infinity.
+  std::vector<float> sorted_, next_;
+  std::vector<std::uint32_t> counts_, next_counts_;  // its candidates
+  std::vector<float> pair_;  // a window's two blocks merged, when they are not a next block
+};
+
+}  // namespace multislit::detail
