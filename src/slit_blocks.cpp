@@ -22,25 +22,58 @@ inline __m128 sortedFour(__m128 x) {
   return _mm_shuffle_ps(mixed, mixed, _MM_SHUFFLE(3, 1, 2, 0));
 }
 
+/// The four lanes of x in ascending order: each pair of lanes in order, the second pair
+/// reversed, and the two compare-exchange stages of sortedFour on that rise and fall.
+inline __m128 sortFour(__m128 x) {
+  const __m128 t = _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1));
+  const __m128 lo = _mm_min_ps(x, t), hi = _mm_max_ps(x, t);             // lanes: 01 01 23 23
+  const __m128 mixed = _mm_shuffle_ps(lo, hi, _MM_SHUFFLE(2, 0, 2, 0));  // min01 min23 max01 max23
+  return sortedFour(_mm_shuffle_ps(mixed, mixed, _MM_SHUFFLE(1, 3, 2, 0)));
+}
+
 /// Merges ascending a[0, cap) and b[0, cap) (cap a power of two >= 4) into out[0, 2 cap): a
 /// followed by b reversed rises then falls, and Batcher's bitonic network of half-cleaners sorts
 /// that, in vector lanes without a branch on the values. Values only: which of two equal values
 /// comes first is not kept (the medians are taken as |median|, so not even the sign of a zero).
-void mergeSorted(const float* a, const float* b, std::size_t cap, float* out) {
-  for (std::size_t j = 0; j < cap; j += 4) {
-    _mm_storeu_ps(out + j, _mm_loadu_ps(a + j));
-    const __m128 x = _mm_loadu_ps(b + j);
-    _mm_storeu_ps(out + 2 * cap - 4 - j, _mm_shuffle_ps(x, x, _MM_SHUFFLE(0, 1, 2, 3)));
+/// `x`: room for 2 cap / 4 vectors; with a length known when compiling, they stay in registers.
+inline void mergeSorted(const float* a, const float* b, std::size_t cap, float* out, __m128* x) {
+  const std::size_t lanes = 2 * cap / 4;
+  for (std::size_t j = 0; j < lanes / 2; ++j) {
+    x[j] = _mm_loadu_ps(a + 4 * j);
+    const __m128 y = _mm_loadu_ps(b + 4 * j);
+    x[lanes - 1 - j] = _mm_shuffle_ps(y, y, _MM_SHUFFLE(0, 1, 2, 3));
   }
-  const std::size_t n = 2 * cap;
-  for (std::size_t d = cap; d >= 4; d /= 2)
-    for (std::size_t i = 0; i < n; i += 2 * d)
-      for (std::size_t j = i; j < i + d; j += 4) {
-        const __m128 x = _mm_loadu_ps(out + j), y = _mm_loadu_ps(out + j + d);
-        _mm_storeu_ps(out + j, _mm_min_ps(x, y));
-        _mm_storeu_ps(out + j + d, _mm_max_ps(x, y));
+  for (std::size_t d = lanes / 2; d >= 1; d /= 2)
+    for (std::size_t i = 0; i < lanes; i += 2 * d)
+      for (std::size_t j = i; j < i + d; ++j) {
+        const __m128 lo = _mm_min_ps(x[j], x[j + d]), hi = _mm_max_ps(x[j], x[j + d]);
+        x[j] = lo;
+        x[j + d] = hi;
       }
-  for (std::size_t j = 0; j < n; j += 4) _mm_storeu_ps(out + j, sortedFour(_mm_loadu_ps(out + j)));
+  for (std::size_t j = 0; j < lanes; ++j) _mm_storeu_ps(out + 4 * j, sortedFour(x[j]));
+}
+
+template <std::size_t kCap>
+void mergeFixed(const float* a, const float* b, float* out) {
+  __m128 x[2 * kCap / 4];
+  mergeSorted(a, b, kCap, out, x);
+}
+
+/// mergeSorted; `room` for the vectors of the blocks longer than 16.
+template <class Lanes>
+void mergeBlocks(const float* a, const float* b, std::size_t cap, float* out,
+                 std::vector<Lanes>& room) {
+  switch (cap) {
+    case 4:
+      return mergeFixed<4>(a, b, out);
+    case 8:
+      return mergeFixed<8>(a, b, out);
+    case 16:
+      return mergeFixed<16>(a, b, out);
+    default:  // a struct of one __m128: the same address as its member
+      room.resize(2 * cap / 4);
+      return mergeSorted(a, b, cap, out, &room.front().x);
+  }
 }
 
 /// The median of ascending `u` without one value equal to `skip` (none when `skip` is NaN):
@@ -69,6 +102,7 @@ void SlitBlocks::start(const std::vector<float>& cells, std::size_t width, std::
 }
 
 void SlitBlocks::sortRow(std::size_t row) {
+  if (cap_ == 4) return sortRowByFour(row);
   const float* cells = cells_ + row * width_;
   for (std::size_t m = 0; m < blocks_; ++m) {
     // Insertion sort: a block of the shortest length holds a few cells.
@@ -83,6 +117,25 @@ void SlitBlocks::sortRow(std::size_t row) {
     }
     std::fill(out + n, out + cap_, kInf);
     counts_[row * blocks_ + m] = n;
+  }
+}
+
+/// Blocks of at most four cells, each sorted in one vector: no candidate (NaN) is +infinity.
+void SlitBlocks::sortRowByFour(std::size_t row) {
+  const float* cells = cells_ + row * width_;
+  const __m128 inf = _mm_set1_ps(kInf);
+  for (std::size_t m = 0; m < blocks_; ++m) {
+    const float none = std::nanf("");  // past the slit's end: no candidate
+    alignas(16) float block[4] = {none, none, none, none};
+    const std::size_t first = m * stride_;
+    std::copy(cells + first, cells + std::min(width_, first + stride_), block);
+    const __m128 x = _mm_load_ps(block);
+    const __m128 nan = _mm_cmpunord_ps(x, x);
+    const __m128 keys = _mm_or_ps(_mm_and_ps(nan, inf), _mm_andnot_ps(nan, x));
+    _mm_storeu_ps(sorted_.data() + (row * blocks_ + m) * 4, sortFour(keys));
+    counts_[row * blocks_ + m] =
+        4 -
+        static_cast<std::uint32_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(nan))));
   }
 }
 
@@ -114,7 +167,7 @@ void SlitBlocks::rowMedians(std::size_t row, std::vector<float>& out) {
       // Blocks m - 1 and m; when m - 1 is even, they are the next length's block (m - 1) / 2.
       const bool pairs = m % 2 == 1;
       float* merged = pairs ? next + (m - 1) * cap_ : pair_.data();
-      mergeSorted(sorted + (m - 1) * cap_, u, cap_, merged);
+      mergeBlocks(sorted + (m - 1) * cap_, u, cap_, merged, room_);
       n += counts[m - 1];
       if (pairs) next_counts[m / 2] = static_cast<std::uint32_t>(n);
       u = merged;

@@ -6,6 +6,8 @@
 // merge of two sorted blocks. Private to the library: FloorDetector's step 6 (slit_scale.cpp).
 #pragma once
 
+#include <immintrin.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -27,6 +29,7 @@ class SlitBlocks {
 
  private:
   void sortRow(std::size_t row);
+  void sortRowByFour(std::size_t row);
   void rowMedians(std::size_t row, std::vector<float>& out);
 
   const float* cells_ = nullptr;
@@ -37,6 +40,10 @@ class SlitBlocks {
   std::vector<float> sorted_, next_;
   std::vector<std::uint32_t> counts_, next_counts_;  // its candidates
   std::vector<float> pair_;  // a window's two blocks merged, when they are not a next block
+  struct Lanes {
+    __m128 x;
+  };
+  std::vector<Lanes> room_;  // a merge of blocks longer than 16
 };
 
 }  // namespace multislit::detail

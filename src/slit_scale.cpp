@@ -71,17 +71,38 @@ void markWindows(const float* cells, std::size_t first_k, std::size_t end_k, std
   }
 }
 
+/// Cells above +limit and below -limit in cells[0, width).
+struct Beyond {
+  std::int32_t up = 0, down = 0;
+};
+Beyond countBeyond(const float* cells, std::size_t width, float limit) {
+  Beyond b;
+  for (std::size_t k = 0; k < width; ++k) {
+    b.up += cells[k] > limit;
+    b.down += cells[k] < -limit;
+  }
+  return b;
+}
+
 /// Marks in `off` the candidates whose window of 2 half + 1 cells holds at least half + 1
 /// candidates, more than half of them beyond `limit` on the side of the cell's own residual
 /// (the window's median beyond it). Running counts along each slit: one pass per window length.
-void markOff(const std::vector<float>& r, std::size_t width, std::size_t half, float limit,
+/// Returns whether it looked at any slit: a slit with fewer than (half + 2) / 2 cells beyond the
+/// limit on either side has no window with more than half of its candidates there (nearly every
+/// slit of a plain floor).
+bool markOff(const std::vector<float>& r, std::size_t width, std::size_t half, float limit,
              std::vector<std::int32_t>& runs, std::vector<std::uint8_t>& off) {
-  runs.assign(3 * (width + 1), 0);
+  runs.resize(3 * (width + 1));
   std::int32_t* valid = runs.data();
   std::int32_t* above = valid + (width + 1);
   std::int32_t* below = above + (width + 1);
+  valid[0] = above[0] = below[0] = 0;
+  bool any = false;
   for (std::size_t row = 0; row + width <= r.size(); row += width) {
     const float* cells = r.data() + row;
+    const Beyond beyond = countBeyond(cells, width, limit);
+    if (2 * static_cast<std::size_t>(std::max(beyond.up, beyond.down)) < half + 2) continue;
+    any = true;
     std::int32_t n = 0, up = 0, down = 0;  // in registers: the arrays may alias for the compiler
     for (std::size_t k = 0; k < width; ++k) {
       const float v = cells[k];
@@ -97,6 +118,7 @@ void markOff(const std::vector<float>& r, std::size_t width, std::size_t half, f
     markWindows<false>(cells, inner_begin, inner_end, width, half, runs.data(), row_off);
     markWindows<true>(cells, inner_end, width, width, half, runs.data(), row_off);
   }
+  return any;
 }
 
 }  // namespace
@@ -116,15 +138,17 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
     r[static_cast<std::size_t>(i)] = planeResidual(p, a, b, c);
   }
   ws.off.assign(cloud.size(), 0);
+  bool looked = false;  // whether any slit could hold a window off the floor
   ws.blocks.start(r, cloud.width, static_cast<std::size_t>(min_window / 2 + 1));
   for (int w = min_window; w <= max_window; w = 2 * w + 1) {
     const auto half = static_cast<std::size_t>(w / 2);
     const double sigma = windowNoise(ws.blocks, ws.medians);  // then blocks for 2 w + 1
     out.sigmas.push_back(sigma);
     if (std::isnan(sigma)) continue;
-    markOff(r, cloud.width, half, static_cast<float>(std::max(sigmas * sigma, min_shift)), ws.runs,
-            ws.off);
+    const auto limit = static_cast<float>(std::max(sigmas * sigma, min_shift));
+    looked |= markOff(r, cloud.width, half, limit, ws.runs, ws.off);
   }
+  if (!looked) return out;
   for (const auto i : candidates) {
     if (!ws.off[static_cast<std::size_t>(i)]) continue;
     out.points.push_back(i);
