@@ -80,10 +80,16 @@ void mergeBlocks(const float* a, const float* b, std::size_t cap, float* out,
 /// of the n values left, the one at position n / 2, for an even n the mean of it and the one
 /// before. Leaving out a value equal to `skip` moves every later one down by one, and a value is
 /// later exactly when it is not below `skip`.
+/// Without branches on the values (reading u[n / 2 + 1]: `u` must hold it), as which way they go
+/// is unpredictable.
 float medianWithout(const float* u, std::size_t n, float skip) {
-  const auto at = [&](std::size_t p) { return !(u[p] >= skip) ? u[p] : u[p + 1]; };
-  const float mid = at(n / 2);
-  return n % 2 == 0 ? 0.5f * (mid + at(n / 2 - 1)) : mid;
+  const auto at = [&](std::size_t p) {
+    const float here = u[p], after = u[p + 1];
+    return !(here >= skip) ? here : after;
+  };
+  const std::size_t p = n / 2;
+  const float mid = at(p), before = at(p > 0 ? p - 1 : 0);
+  return n % 2 == 0 ? 0.5f * (mid + before) : mid;
 }
 
 }  // namespace
@@ -133,9 +139,8 @@ void SlitBlocks::sortRowByFour(std::size_t row) {
     const __m128 nan = _mm_cmpunord_ps(x, x);
     const __m128 keys = _mm_or_ps(_mm_and_ps(nan, inf), _mm_andnot_ps(nan, x));
     _mm_storeu_ps(sorted_.data() + (row * blocks_ + m) * 4, sortFour(keys));
-    counts_[row * blocks_ + m] =
-        4 -
-        static_cast<std::uint32_t>(__builtin_popcount(static_cast<unsigned>(_mm_movemask_ps(nan))));
+    constexpr std::uint8_t kNone[16] = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+    counts_[row * blocks_ + m] = 4u - kNone[_mm_movemask_ps(nan)];
   }
 }
 
@@ -144,7 +149,13 @@ void SlitBlocks::mediansThenDouble(std::vector<float>& out) {
   next_.resize(rows_ * next_blocks * 2 * cap_);
   next_counts_.resize(rows_ * next_blocks);
   pair_.resize(2 * cap_);
-  for (std::size_t row = 0; row < rows_; ++row) rowMedians(row, out);
+  // Each window's median is written, then kept or not: no branch on it.
+  const std::size_t first = out.size();
+  out.resize(first + rows_ * blocks_);
+  std::size_t taken = 0;
+  for (std::size_t row = 0; row < rows_; ++row)
+    taken += rowMedians(row, out.data() + first + taken);
+  out.resize(first + taken);
   std::swap(sorted_, next_);
   std::swap(counts_, next_counts_);
   stride_ *= 2;
@@ -152,7 +163,8 @@ void SlitBlocks::mediansThenDouble(std::vector<float>& out) {
   blocks_ = next_blocks;
 }
 
-void SlitBlocks::rowMedians(std::size_t row, std::vector<float>& out) {
+std::size_t SlitBlocks::rowMedians(std::size_t row, float* out) {
+  std::size_t taken = 0;
   const float* cells = cells_ + row * width_;
   const float* sorted = sorted_.data() + row * blocks_ * cap_;
   const std::uint32_t* counts = counts_.data() + row * blocks_;
@@ -181,8 +193,10 @@ void SlitBlocks::rowMedians(std::size_t row, std::vector<float>& out) {
       next_counts[m / 2] = counts[m];
     }
     const float centre = cells[m * stride_];
-    if (!std::isnan(centre) && n >= stride_) out.push_back(std::abs(medianWithout(u, n, skip)));
+    out[taken] = std::abs(medianWithout(u, n, skip));
+    taken += !std::isnan(centre) && n >= stride_;
   }
+  return taken;
 }
 
 }  // namespace multislit::detail

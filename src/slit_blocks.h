@@ -30,7 +30,7 @@ class SlitBlocks {
  private:
   void sortRow(std::size_t row);
   void sortRowByFour(std::size_t row);
-  void rowMedians(std::size_t row, std::vector<float>& out);
+  std::size_t rowMedians(std::size_t row, float* out);  // how many it wrote
 
   const float* cells_ = nullptr;
   std::size_t rows_ = 0, width_ = 0, stride_ = 0;
