@@ -2,6 +2,7 @@
 
 #include "multislit/plane_model.h"
 
+#include "rdm_simd.h"
 #include "slit_blocks.h"
 
 #include <algorithm>
@@ -150,6 +151,29 @@ bool markOff(const std::vector<float>& r, std::size_t width, std::size_t half, f
   return any;
 }
 
+/// r[i] = planeResidual() of each candidate i in float, NaN for the other cells; four points at
+/// a time with the same float operations.
+void residualsAt(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& candidates,
+                 const Eigen::Vector3d& plane, std::vector<float>& r) {
+  r.assign(cloud.size(), kNaN);
+  const float a = static_cast<float>(plane[0]), b = static_cast<float>(plane[1]),
+              c = static_cast<float>(plane[2]);
+  const __m128 va = _mm_set1_ps(a), vb = _mm_set1_ps(b), vc = _mm_set1_ps(c);
+  const PointRDM* points = cloud.points.data();
+  const pcl::index_t* ids = candidates.data();
+  const std::size_t n = candidates.size();
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const simd::UVDK4 p =
+        simd::loadUVDK(points[ids[k]], points[ids[k + 1]], points[ids[k + 2]], points[ids[k + 3]]);
+    alignas(16) float lr[4];
+    _mm_store_ps(
+        lr, _mm_sub_ps(p.dk, _mm_add_ps(_mm_add_ps(_mm_mul_ps(va, p.u), _mm_mul_ps(vb, p.v)), vc)));
+    for (std::size_t j = 0; j < 4; ++j) r[static_cast<std::size_t>(ids[k + j])] = lr[j];
+  }
+  for (; k < n; ++k) r[static_cast<std::size_t>(ids[k])] = planeResidual(points[ids[k]], a, b, c);
+}
+
 }  // namespace
 
 SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
@@ -159,13 +183,7 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
   if (!cloud.isOrganized() || cloud.width < 3) return out;
   Workspace& ws = workspace();
   std::vector<float>& r = ws.r;
-  r.assign(cloud.size(), kNaN);
-  const float a = static_cast<float>(plane[0]), b = static_cast<float>(plane[1]),
-              c = static_cast<float>(plane[2]);
-  for (const auto i : candidates) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    r[static_cast<std::size_t>(i)] = planeResidual(p, a, b, c);
-  }
+  residualsAt(cloud, candidates, plane, r);
   ws.off.assign(cloud.size(), 0);
   bool looked = false;  // whether any slit could hold a window off the floor
   ws.blocks.start(r, cloud.width, static_cast<std::size_t>(min_window / 2 + 1));
@@ -178,13 +196,19 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
     looked |= markOff(r, cloud.width, half, limit, ws.runs, ws.off);
   }
   if (!looked) return out;
-  const std::uint8_t* off = ws.off.data();  // held: the lists below might alias the workspace
+  // Every candidate is written, and the lists move on past the marked ones: no branch.
+  out.points.resize(candidates.size() + 1);
+  out.residuals.resize(candidates.size() + 1);
+  const std::uint8_t* off = ws.off.data();
   const float* residuals = r.data();
+  std::size_t kept = 0;
   for (const auto i : candidates) {
-    if (!off[static_cast<std::size_t>(i)]) continue;
-    out.points.push_back(i);
-    out.residuals.push_back(residuals[static_cast<std::size_t>(i)]);
+    out.points[kept] = i;
+    out.residuals[kept] = residuals[static_cast<std::size_t>(i)];
+    kept += off[static_cast<std::size_t>(i)];
   }
+  out.points.resize(kept);
+  out.residuals.resize(kept);
   return out;
 }
 
