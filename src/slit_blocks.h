@@ -3,7 +3,9 @@
 // m (half + 1) is block m of half + 1 cells and block m - 1 without its first cell, and a block
 // of the next length, 2 (half + 1) cells, is two adjacent blocks of this one. So each cell is
 // sorted once, in blocks of the shortest length, and every longer block and every window is a
-// merge of two sorted blocks. Private to the library: FloorDetector's step 6 (slit_scale.cpp).
+// merge of two sorted blocks. Four blocks side by side in the four lanes of a vector: the sorting
+// networks then compare whole vectors, without shuffles inside them. Private to the library:
+// FloorDetector's step 6 (slit_scale.cpp).
 #pragma once
 
 #include <immintrin.h>
@@ -27,23 +29,26 @@ class SlitBlocks {
   /// Then moves on to blocks of 2 stride cells.
   void mediansThenDouble(std::vector<float>& out);
 
+  struct Lanes {  // one vector, in containers
+    __m128 x;
+  };
+
  private:
   void sortRow(std::size_t row);
-  void sortRowByFour(std::size_t row);
   std::size_t rowMedians(std::size_t row, float* out);  // how many it wrote
 
   const float* cells_ = nullptr;
   std::size_t rows_ = 0, width_ = 0, stride_ = 0;
   std::size_t blocks_ = 0;  // blocks per slit
-  std::size_t cap_ = 0;     // floats per block: a power of two >= 4, >= stride_
-  // Block m of slit s at (s blocks_ + m) cap_: its candidates ascending, then +infinity.
-  std::vector<float> sorted_, next_;
-  std::vector<std::uint32_t> counts_, next_counts_;  // its candidates
-  std::vector<float> pair_;  // a window's two blocks merged, when they are not a next block
-  struct Lanes {
-    __m128 x;
-  };
-  std::vector<Lanes> room_;  // a merge of blocks longer than 16
+  std::size_t groups_ = 0;  // groups of four blocks per slit
+  std::size_t cap_ = 0;     // values per block: a power of two >= 4, >= stride_
+  // Group g of slit s, blocks 4 g .. 4 g + 3 in lanes 0 .. 3: cap_ vectors from
+  // (s groups_ + g) cap_, vector i the i-th smallest candidate of each block, +infinity past
+  // the block's count.
+  std::vector<Lanes> sorted_, next_;
+  std::vector<std::int32_t> counts_, next_counts_;  // per block: its candidates
+  std::vector<Lanes> merged_;                       // two groups' windows, merged
+  std::vector<float> block_;                        // one block, sorted (blocks longer than 4)
 };
 
 }  // namespace multislit::detail
