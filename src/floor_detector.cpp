@@ -90,8 +90,7 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
     const pcl::index_t* ids = valid.data() + k;
     const simd::UVDK4 p =
         simd::loadUVDK(points[ids[0]], points[ids[1]], points[ids[2]], points[ids[3]]);
-    const __m128 r =
-        _mm_sub_ps(p.dk, _mm_add_ps(_mm_add_ps(_mm_mul_ps(va, p.u), _mm_mul_ps(vb, p.v)), vc));
+    const __m128 r = simd::planeResiduals(p, va, vb, vc);
     const int in = _mm_movemask_ps(_mm_cmple_ps(_mm_andnot_ps(sign, r), vt));
     alignas(16) float lr[4];
     _mm_store_ps(lr, r);

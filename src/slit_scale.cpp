@@ -20,9 +20,8 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr std::size_t kMinMedians = 50;  // fewer windows: the scale's noise is not measured
 
-/// The buffers of one call, kept from frame to frame: the stage runs on every frame, and
-/// allocating and zeroing them each time took a tenth of it. One per thread, so that detectors
-/// may run on several threads at once.
+/// The buffers of one call, kept from frame to frame: the stage runs on every frame, so they are
+/// allocated once. One per thread, so that detectors may run on several threads at once.
 struct Workspace {
   std::vector<float> r;             ///< per cell: the candidate's residual, NaN for the others
   std::vector<std::uint8_t> off;    ///< per cell: off the floor at some scale
@@ -167,8 +166,7 @@ void residualsAt(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& can
     const simd::UVDK4 p =
         simd::loadUVDK(points[ids[k]], points[ids[k + 1]], points[ids[k + 2]], points[ids[k + 3]]);
     alignas(16) float lr[4];
-    _mm_store_ps(
-        lr, _mm_sub_ps(p.dk, _mm_add_ps(_mm_add_ps(_mm_mul_ps(va, p.u), _mm_mul_ps(vb, p.v)), vc)));
+    _mm_store_ps(lr, simd::planeResiduals(p, va, vb, vc));
     for (std::size_t j = 0; j < 4; ++j) r[static_cast<std::size_t>(ids[k + j])] = lr[j];
   }
   for (; k < n; ++k) r[static_cast<std::size_t>(ids[k])] = planeResidual(points[ids[k]], a, b, c);
