@@ -10,7 +10,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 
 namespace multislit::detail {
@@ -23,12 +22,11 @@ constexpr std::size_t kMinMedians = 50;  // fewer windows: the scale's noise is 
 /// The buffers of one call, kept from frame to frame: the stage runs on every frame, so they are
 /// allocated once. One per thread, so that detectors may run on several threads at once.
 struct Workspace {
-  std::vector<float> r;             ///< per cell: the candidate's residual, NaN for the others
-  std::vector<std::uint8_t> off;    ///< per cell: off the floor at some scale
-  std::vector<float> medians;       ///< |window median| of one scale
-  std::vector<std::uint32_t> bits;  ///< their bits (middleOf)
-  SlitBlocks blocks;                ///< the sorted blocks of the current and the next scale
-  std::vector<std::int32_t> runs;   ///< running counts of one slit (markOff)
+  std::vector<float> r;            ///< per cell: the candidate's residual, NaN for the others
+  std::vector<std::uint8_t> off;   ///< per cell: off the floor at some scale
+  std::vector<float> medians;      ///< |window median| of one scale
+  SlitBlocks blocks;               ///< the sorted blocks of the current and the next scale
+  std::vector<std::int32_t> runs;  ///< running counts of one slit (markOff)
 };
 
 Workspace& workspace() {
@@ -37,30 +35,32 @@ Workspace& workspace() {
 }
 
 /// The value std::nth_element would place at position values.size() / 2 of `values` (not
-/// empty, every one >= 0 and not NaN), from their bits: the bits of floats >= 0 ascend with them.
-/// A byte at a time from the top, it keeps the values whose byte is the one the middle position
-/// falls in: four passes that branch on nothing, where a selection by comparisons mispredicts
-/// half of its branches.
-float middleOf(const std::vector<float>& values, std::vector<std::uint32_t>& bits) {
-  bits.resize(values.size());
-  std::memcpy(bits.data(), values.data(), values.size() * sizeof(float));
-  std::size_t n = bits.size(), k = n / 2;
-  for (int shift = 24; shift >= 0; shift -= 8) {
-    std::array<std::uint32_t, 256> counts{};
-    for (std::size_t i = 0; i < n; ++i) ++counts[(bits[i] >> shift) & 0xffu];
-    std::uint32_t digit = 0;
-    while (k >= counts[digit]) k -= counts[digit++];
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t b = bits[i];
-      bits[kept] = b;
-      kept += ((b >> shift) & 0xffu) == digit;
-    }
-    n = kept;
+/// empty, every one >= 0 and not NaN; reordered). The values are counted in 256 bins of equal
+/// width up to the largest, an order-keeping map; the middle then lies among the few of one bin.
+/// Three passes without a branch on the values, where a selection by comparisons over all of
+/// them mispredicts half of its branches.
+float middleOf(std::vector<float>& values) {
+  std::size_t k = values.size() / 2;
+  float top = 0.0f;
+  for (const float v : values) top = std::max(top, v);
+  if (!(top < std::numeric_limits<float>::infinity()) || top == 0.0f) {
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    return values[k];
   }
-  float middle = 0.0f;
-  std::memcpy(&middle, bits.data(), sizeof middle);
-  return middle;
+  const float scale = 255.0f / top;  // v * scale rises with v and stays below 256
+  const auto bin = [scale](float v) { return static_cast<std::size_t>(v * scale); };
+  std::array<std::uint32_t, 256> counts{};
+  for (const float v : values) ++counts[bin(v)];
+  std::size_t middle_bin = 0;
+  while (k >= counts[middle_bin]) k -= counts[middle_bin++];
+  std::size_t kept = 0;
+  for (const float v : values) {
+    values[kept] = v;
+    kept += bin(v) == middle_bin;
+  }
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(k);
+  std::nth_element(values.begin(), mid, values.begin() + static_cast<std::ptrdiff_t>(kept));
+  return *mid;
 }
 
 /// The noise of the window medians of 2 half + 1 cells: 1.4826 x the median |median| of the
@@ -68,12 +68,11 @@ float middleOf(const std::vector<float>& values, std::vector<std::uint32_t>& bit
 /// half + 1 candidates: windows overlapping by half, not all (neighbouring windows share nearly all
 /// their cells). NaN with fewer than kMinMedians windows. `blocks` holds this scale's sorted
 /// blocks of half + 1 cells; each window is two of them. Leaves `blocks` at the next length.
-double windowNoise(SlitBlocks& blocks, std::vector<float>& medians,
-                   std::vector<std::uint32_t>& bits) {
+double windowNoise(SlitBlocks& blocks, std::vector<float>& medians) {
   medians.clear();
   blocks.mediansThenDouble(medians);
   if (medians.size() < kMinMedians) return std::numeric_limits<double>::quiet_NaN();
-  return 1.4826 * static_cast<double>(middleOf(medians, bits));
+  return 1.4826 * static_cast<double>(middleOf(medians));
 }
 
 /// Marks in `off` the candidates among cells [first_k, end_k) of one slit (`cells`, `width` of
@@ -187,7 +186,7 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
   ws.blocks.start(r, cloud.width, static_cast<std::size_t>(min_window / 2 + 1));
   for (int w = min_window; w <= max_window; w = 2 * w + 1) {
     const auto half = static_cast<std::size_t>(w / 2);
-    const double sigma = windowNoise(ws.blocks, ws.medians, ws.bits);  // then blocks for 2 w + 1
+    const double sigma = windowNoise(ws.blocks, ws.medians);  // then blocks for 2 w + 1
     out.sigmas.push_back(sigma);
     if (std::isnan(sigma)) continue;
     const auto limit = static_cast<float>(std::max(sigmas * sigma, min_shift));
