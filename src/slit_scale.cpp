@@ -193,19 +193,18 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
     looked |= markOff(r, cloud.width, half, limit, ws.runs, ws.off);
   }
   if (!looked) return out;
-  // Every candidate is written, and the lists move on past the marked ones: no branch.
-  out.points.resize(candidates.size() + 1);
-  out.residuals.resize(candidates.size() + 1);
+  // Counted first: the lists are then allocated once, and written only where marked (rarely).
   const std::uint8_t* off = ws.off.data();
   const float* residuals = r.data();
-  std::size_t kept = 0;
+  std::size_t marked = 0;
+  for (const auto i : candidates) marked += off[static_cast<std::size_t>(i)];
+  out.points.reserve(marked);
+  out.residuals.reserve(marked);
   for (const auto i : candidates) {
-    out.points[kept] = i;
-    out.residuals[kept] = residuals[static_cast<std::size_t>(i)];
-    kept += off[static_cast<std::size_t>(i)];
+    if (!off[static_cast<std::size_t>(i)]) continue;
+    out.points.push_back(i);
+    out.residuals.push_back(residuals[static_cast<std::size_t>(i)]);
   }
-  out.points.resize(kept);
-  out.residuals.resize(kept);
   return out;
 }
 
