@@ -161,24 +161,22 @@ void SlitBlocks::sortRow(std::size_t row) {
   }
 }
 
-void SlitBlocks::mediansThenDouble(std::vector<float>& out) {
+std::size_t SlitBlocks::mediansThenDouble(std::vector<float>& out) {
   const std::size_t next_groups = (groups_ + 1) / 2;
   next_.resize(rows_ * next_groups * 2 * cap_);
   next_counts_.resize(rows_ * next_groups * 4);
   merged_.resize(2 * 2 * cap_);
   // Each window's median is written, then kept or not: no branch on it.
-  const std::size_t first = out.size();
-  out.resize(first + rows_ * blocks_);
+  if (out.size() < rows_ * blocks_) out.resize(rows_ * blocks_);
   std::size_t taken = 0;
-  for (std::size_t row = 0; row < rows_; ++row)
-    taken += rowMedians(row, out.data() + first + taken);
-  out.resize(first + taken);
+  for (std::size_t row = 0; row < rows_; ++row) taken += rowMedians(row, out.data() + taken);
   std::swap(sorted_, next_);
   std::swap(counts_, next_counts_);
   stride_ *= 2;
   cap_ *= 2;
   blocks_ = (blocks_ + 1) / 2;
   groups_ = next_groups;
+  return taken;
 }
 
 std::size_t SlitBlocks::rowMedians(std::size_t row, float* out) {

@@ -23,11 +23,12 @@ class SlitBlocks {
   /// this is used.
   void start(const std::vector<float>& cells, std::size_t width, std::size_t stride);
 
-  /// Appends to `out`, slit by slit, the |median| of each window of 2 stride - 1 cells centred on
-  /// a candidate cell m stride that holds at least stride candidates: the value at position n / 2
-  /// of its n candidates in ascending order, for an even n the mean of it and the one before.
-  /// Then moves on to blocks of 2 stride cells.
-  void mediansThenDouble(std::vector<float>& out);
+  /// Writes to the start of `out` (grown as needed, never cut: it is kept from frame to frame),
+  /// slit by slit, the |median| of each window of 2 stride - 1 cells centred on a candidate cell
+  /// m stride that holds at least stride candidates: the value at position n / 2 of its n
+  /// candidates in ascending order, for an even n the mean of it and the one before. Returns how
+  /// many. Then moves on to blocks of 2 stride cells.
+  std::size_t mediansThenDouble(std::vector<float>& out);
 
   struct Lanes {  // one vector, in containers
     __m128 x;

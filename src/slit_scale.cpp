@@ -34,33 +34,33 @@ Workspace& workspace() {
   return w;
 }
 
-/// The value std::nth_element would place at position values.size() / 2 of `values` (not
-/// empty, every one >= 0 and not NaN; reordered). The values are counted in 256 bins of equal
+/// The value std::nth_element would place at position n / 2 of values[0, n) (n > 0, every one
+/// >= 0 and not NaN; reordered). The values are counted in 256 bins of equal
 /// width up to the largest, an order-keeping map; the middle then lies among the few of one bin.
 /// Three passes without a branch on the values, where a selection by comparisons over all of
 /// them mispredicts half of its branches.
-float middleOf(std::vector<float>& values) {
-  std::size_t k = values.size() / 2;
+float middleOf(float* values, std::size_t n) {
+  std::size_t k = n / 2;
   float top = 0.0f;
-  for (const float v : values) top = std::max(top, v);
+  for (std::size_t i = 0; i < n; ++i) top = std::max(top, values[i]);
   if (!(top < std::numeric_limits<float>::infinity()) || top == 0.0f) {
-    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+    std::nth_element(values, values + k, values + n);
     return values[k];
   }
   const float scale = 255.0f / top;  // v * scale rises with v and stays below 256
   const auto bin = [scale](float v) { return static_cast<std::size_t>(v * scale); };
   std::array<std::uint32_t, 256> counts{};
-  for (const float v : values) ++counts[bin(v)];
+  for (std::size_t i = 0; i < n; ++i) ++counts[bin(values[i])];
   std::size_t middle_bin = 0;
   while (k >= counts[middle_bin]) k -= counts[middle_bin++];
   std::size_t kept = 0;
-  for (const float v : values) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = values[i];
     values[kept] = v;
     kept += bin(v) == middle_bin;
   }
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(k);
-  std::nth_element(values.begin(), mid, values.begin() + static_cast<std::ptrdiff_t>(kept));
-  return *mid;
+  std::nth_element(values, values + k, values + kept);
+  return values[k];
 }
 
 /// The noise of the window medians of 2 half + 1 cells: 1.4826 x the median |median| of the
@@ -69,10 +69,9 @@ float middleOf(std::vector<float>& values) {
 /// their cells). NaN with fewer than kMinMedians windows. `blocks` holds this scale's sorted
 /// blocks of half + 1 cells; each window is two of them. Leaves `blocks` at the next length.
 double windowNoise(SlitBlocks& blocks, std::vector<float>& medians) {
-  medians.clear();
-  blocks.mediansThenDouble(medians);
-  if (medians.size() < kMinMedians) return std::numeric_limits<double>::quiet_NaN();
-  return 1.4826 * static_cast<double>(middleOf(medians));
+  const std::size_t n = blocks.mediansThenDouble(medians);
+  if (n < kMinMedians) return std::numeric_limits<double>::quiet_NaN();
+  return 1.4826 * static_cast<double>(middleOf(medians.data(), n));
 }
 
 /// Marks in `off` the candidates among cells [first_k, end_k) of one slit (`cells`, `width` of
