@@ -62,12 +62,16 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   const float t = static_cast<float>(threshold);
   const std::size_t n = valid.size();
   result.inliers.resize(n);
-  result.obstacles.resize(n);
-  result.obstacle_residuals.resize(n);
+  // The obstacles, a few of the points, first into buffers kept from frame to frame (one per
+  // thread): full-length lists of the result would be allocated, zeroed and cut on every frame.
+  thread_local std::vector<pcl::index_t> obstacle_buffer;
+  thread_local std::vector<float> residual_buffer;
+  if (obstacle_buffer.size() < n) obstacle_buffer.resize(n);
+  if (residual_buffer.size() < n) residual_buffer.resize(n);
   const PointRDM* points = cloud.points.data();
   pcl::index_t* inliers = result.inliers.data();
-  pcl::index_t* obstacles = result.obstacles.data();
-  float* residuals = result.obstacle_residuals.data();
+  pcl::index_t* obstacles = obstacle_buffer.data();
+  float* residuals = residual_buffer.data();
   std::size_t floor = 0, off = 0;
   double sum_sq = 0.0;
   // Branch-free: each point is written to both lists, and the one it belongs to moves on.
@@ -90,8 +94,7 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
     const pcl::index_t* ids = valid.data() + k;
     const simd::UVDK4 p =
         simd::loadUVDK(points[ids[0]], points[ids[1]], points[ids[2]], points[ids[3]]);
-    const __m128 r =
-        _mm_sub_ps(p.dk, _mm_add_ps(_mm_add_ps(_mm_mul_ps(va, p.u), _mm_mul_ps(vb, p.v)), vc));
+    const __m128 r = simd::planeResiduals(p, va, vb, vc);
     const int in = _mm_movemask_ps(_mm_cmple_ps(_mm_andnot_ps(sign, r), vt));
     alignas(16) float lr[4];
     _mm_store_ps(lr, r);
@@ -110,10 +113,8 @@ void split(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& valid, do
   // Before any call, which would make the compiler keep the sum in memory throughout the loop.
   if (floor > 0) result.residual_std = std::sqrt(sum_sq / static_cast<double>(floor));
   result.inliers.resize(floor);
-  result.obstacles.resize(off);
-  result.obstacle_residuals.resize(off);
-  result.obstacles.shrink_to_fit();
-  result.obstacle_residuals.shrink_to_fit();
+  result.obstacles.assign(obstacles, obstacles + off);
+  result.obstacle_residuals.assign(residuals, residuals + off);
 }
 
 /// |dk - (A u + B v + C)| of the valid points below `band`, counted in kBins equal bins: the

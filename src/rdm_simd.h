@@ -28,6 +28,12 @@ inline UVDK4 loadUVDK(const PointRDM& p0, const PointRDM& p1, const PointRDM& p2
   return {u, v, dk};
 }
 
+/// planeResidual() of the four points, dk - (a u + b v + c), with its float operations in its
+/// order: the same bits.
+inline __m128 planeResiduals(const UVDK4& p, __m128 a, __m128 b, __m128 c) {
+  return _mm_sub_ps(p.dk, _mm_add_ps(_mm_add_ps(_mm_mul_ps(a, p.u), _mm_mul_ps(b, p.v)), c));
+}
+
 /// isValidRDMPoint() of the four points: bit j set when point j is valid.
 inline int validMask(const UVDK4& p) {
   const __m128 finite =
