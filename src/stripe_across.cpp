@@ -195,13 +195,14 @@ template <typename T>
 void AcrossColumns::gather(const cv::Mat& image, int row, double c, double slope,
                            const AcrossStripe& p, long x0, int columns, const AcrossColumn** out) {
   const int h = p.half_rows;
-  // A column is reused when it was measured with a window within a row of where this point
-  // would place it: the stripe lies well inside either window.
+  // A column is reused only when it was measured with the window this point would place: then
+  // its crossing is what this point would measure. Windows a row off would be reused more often,
+  // but they tie neighbouring points' errors together (docs/speed.md).
   const double per_column = 1.0 / slope;
   auto cached = [&](long x) -> const AcrossColumn* {
     const AcrossColumn& m = slots_[static_cast<std::size_t>(x) & (kSlots - 1)];
     const long lo = std::lround(row + (static_cast<double>(x) - c) * per_column) - h;
-    const bool same = m.x == x && m.half_rows == h && std::abs(m.first_row - lo) <= 1;
+    const bool same = m.x == x && m.half_rows == h && m.first_row == lo;
     return same ? &m : nullptr;
   };
   long first_missing = 0, last_missing = -1;

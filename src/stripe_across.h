@@ -57,7 +57,8 @@ struct AcrossColumn {
 /// The columns measured for the points of one slit, reused by its next points: neighbouring
 /// points of a slit (rows k and k + 1) measure columns about |du/dv| apart, so seven columns a
 /// point share four or five with the next. Measured eight at a time, ahead along the slit; a
-/// column is reused when its profile was placed within a row of where this point places it.
+/// column is reused when its profile was placed where this point places it (the same rows), so
+/// every point's centre is what it would measure from its own columns.
 /// clear() before each slit and each image.
 class AcrossColumns {
  public:
