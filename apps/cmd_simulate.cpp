@@ -4,6 +4,7 @@
 #include "common.h"
 #include "config_options.h"
 #include "output_file.h"
+#include "photometry_input.h"
 
 #include "multislit/odometry.h"
 #include "multislit/sim/photometry.h"
@@ -223,9 +224,7 @@ int runSimulate(int argc, char** argv) {
   used.validate();  // the sensor.yaml written below is one SensorConfig::load() takes
 
   const std::filesystem::path out = args.str("out");
-  std::vector<NamedInput> inputs = inputsOf(args, {"sensor", "scene"});
-  if (isPhotometryFile(args.str("photometry")))
-    inputs.push_back({"--photometry", args.str("photometry")});
+  const std::vector<NamedInput> inputs = inputsWithPhotometry(args, {"sensor", "scene"});
   refuseOutputFolder(out, "--out",
                      {"sensor.yaml", "scene.yaml", "photometry.yaml", "reference.png",
                       "reference.csv", "frames.csv", "odometry.csv"},

@@ -8,6 +8,7 @@
 #include "multislit/units.h"
 #include "object_outline.h"
 #include "output_file.h"
+#include "photometry_input.h"
 #include "plot.h"
 #include "recording.h"
 #include "walk_csv.h"
@@ -320,9 +321,7 @@ void writeFigures(Recorder& r, const WalkSimulation& walk, const std::filesystem
 /// them where it writes.
 std::vector<NamedInput> checkedInputs(const cli::ArgParser& args,
                                       const std::filesystem::path& out) {
-  std::vector<NamedInput> inputs = inputsOf(args, {"sensor"});
-  if (isPhotometryFile(args.str("photometry")))
-    inputs.push_back({"--photometry", args.str("photometry")});
+  std::vector<NamedInput> inputs = inputsWithPhotometry(args, {"sensor"});
   refuseOutputFolder(out, "--out",
                      {"obstacles.csv", "summary.txt", "map.bt", "map_top.png",
                       "fig15_obstacle_points.png", "sweep_passes.csv", "sweep_histograms.csv"},
