@@ -105,9 +105,12 @@ MULTISLIT_AVX2_CLONES void columnOffsets(const Columns& c, double* out) {
   }
 }
 
-/// Fills lane j of `cols` with column x0 + j (lanes [0, lanes)), its profile starting where the
-/// stripe through (`c`, `row`) of direction `slope` should cross it, `h` rows above; records each
-/// lane's first row (cols.used is 0 where the column's window leaves the image: an empty lane).
+/// The first row of column x's profile: `h` rows above where the stripe through (`c`, `row`), at
+/// 1 / `per_column` columns a row, should cross it.
+inline long firstRowOf(int row, double c, double per_column, int h, long x) {
+  return std::lround(row + (static_cast<double>(x) - c) * per_column) - h;
+}
+
 /// Fills lane j of `cols` with column x0 + j (lanes [0, lanes)), its profile starting where the
 /// stripe through (`c`, `row`) of direction `slope` should cross it, `h` rows above; records each
 /// lane's first row (cols.used is 0 where the column's window leaves the image: an empty lane).
@@ -116,8 +119,7 @@ void placeColumns(const cv::Mat& image, int row, double c, double slope, int h, 
                   Columns& cols, long* first_row) {
   const int count = 2 * h + 1;
   const double per_column = 1.0 / slope;
-  for (int j = 0; j < kLanes; ++j)
-    first_row[j] = std::lround(row + (static_cast<double>(x0 + j) - c) * per_column) - h;
+  for (int j = 0; j < kLanes; ++j) first_row[j] = firstRowOf(row, c, per_column, h, x0 + j);
   const std::size_t step = image.step1();
   for (int j = 0; j < kLanes; ++j) {
     const long x = x0 + j, lo = first_row[j];
@@ -201,8 +203,8 @@ void AcrossColumns::gather(const cv::Mat& image, int row, double c, double slope
   const double per_column = 1.0 / slope;
   auto cached = [&](long x) -> const AcrossColumn* {
     const AcrossColumn& m = slots_[static_cast<std::size_t>(x) & (kSlots - 1)];
-    const long lo = std::lround(row + (static_cast<double>(x) - c) * per_column) - h;
-    const bool same = m.x == x && m.half_rows == h && m.first_row == lo;
+    const bool same =
+        m.x == x && m.half_rows == h && m.first_row == firstRowOf(row, c, per_column, h, x);
     return same ? &m : nullptr;
   };
   long first_missing = 0, last_missing = -1;
