@@ -164,16 +164,7 @@ bool Extractor::finishIdeal(const Task& t, double centre, PointRDM* p) const {
   return true;
 }
 
-bool Extractor::finish(const cv::Mat& image, const Task& t, double centre,
-                       const ProfileParams& params, PointRDM* p, AcrossColumns* shared) const {
-  if (config_.across_stripe) {
-    AcrossStripe across;  // the row's tests, applied to the columns' profiles
-    across.min_contrast = params.min_contrast;
-    across.fit_threshold = params.fit_threshold;
-    across.max_move = params.half_window;
-    across.half_rows = acrossHalfRows(params.half_window, t.slope);
-    acrossStripeCentre(image, t.row, centre, t.slope, across, &centre, shared);
-  }
+bool Extractor::finish(const cv::Mat& image, const Task& t, double centre, PointRDM* p) const {
   // The image spans columns -0.5 to cols - 0.5 (pixel centres at whole numbers).
   if (!(centre > -0.5 && centre < image.cols - 0.5)) return false;
   if (!ideal_tasks_.empty()) return finishIdeal(t, centre, p);
@@ -194,7 +185,7 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
                            pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const {
   // First every row's profile, top to bottom (the image is read once, in order); then each slit's
   // points in order along it, so that the columns measured across the stripe for one point serve
-  // the next (AcrossColumns).
+  // the next (SlitColumns).
   thread_local std::vector<double> centres;
   centres.assign(tasks_.size(), std::numeric_limits<double>::quiet_NaN());
   constexpr std::size_t kBatch = 8;  // regions measured per call
@@ -212,15 +203,41 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
       if (found[i]) centres[begin + i] = peaks[i].centre;
   }
   PointRDM* points = cloud.points.data();
-  AcrossColumns shared;
-  std::uint32_t slit = std::numeric_limits<std::uint32_t>::max();
   const auto width = static_cast<std::uint32_t>(cloud.width);
-  for (const std::uint32_t i : along_slits_) {
-    const Task& t = tasks_[i];
-    if (!std::isfinite(centres[i])) continue;
-    if (t.cell / width != slit) slit = t.cell / width, shared.clear();
-    if (finish(image, t, centres[i], params, &points[t.cell], &shared)) ++stats.valid;
+  for (std::size_t begin = 0; begin < along_slits_.size();) {
+    const std::uint32_t slit = tasks_[along_slits_[begin]].cell / width;
+    std::size_t end = begin + 1;
+    while (end < along_slits_.size() && tasks_[along_slits_[end]].cell / width == slit) ++end;
+    if (config_.across_stripe) acrossSlit<T>(image, params, begin, end, centres.data());
+    for (std::size_t k = begin; k < end; ++k) {
+      const Task& t = tasks_[along_slits_[k]];
+      const double centre = centres[along_slits_[k]];
+      if (std::isfinite(centre) && finish(image, t, centre, &points[t.cell])) ++stats.valid;
+    }
+    begin = end;
   }
+}
+
+template <typename T>
+void Extractor::acrossSlit(const cv::Mat& image, const ProfileParams& params, std::size_t begin,
+                           std::size_t end, double* centres) const {
+  AcrossStripe across;  // the row's tests, applied to the columns' profiles
+  across.min_contrast = params.min_contrast;
+  across.fit_threshold = params.fit_threshold;
+  across.max_move = params.half_window;
+  thread_local SlitColumns columns;
+  columns.clear();
+  for (std::size_t k = begin; k < end; ++k) {
+    const Task& t = tasks_[along_slits_[k]];
+    if (!std::isfinite(centres[along_slits_[k]])) continue;
+    across.half_rows = acrossHalfRows(params.half_window, t.slope);
+    columns.plan(t.row, centres[along_slits_[k]], t.slope, across);
+  }
+  columns.measure<T>(image);
+  std::size_t planned = 0;
+  for (std::size_t k = begin; k < end; ++k)
+    if (std::isfinite(centres[along_slits_[k]]))
+      columns.centre<T>(image, planned++, &centres[along_slits_[k]]);
 }
 
 template <typename T>

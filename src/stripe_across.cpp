@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <iterator>
+#include <limits>
 
 namespace multislit {
 
@@ -111,77 +113,85 @@ inline long firstRowOf(int row, double c, double per_column, int h, long x) {
   return std::lround(row + (static_cast<double>(x) - c) * per_column) - h;
 }
 
-/// Fills lane j of `cols` with column x0 + j (lanes [0, lanes)), its profile starting where the
-/// stripe through (`c`, `row`) of direction `slope` should cross it, `h` rows above; records each
-/// lane's first row (cols.used is 0 where the column's window leaves the image: an empty lane).
+/// Fills lane j of `cols` with the profile of column xs[j] from row first_rows[j] on, `h` rows
+/// each side of its middle (lanes [0, lanes)); cols.used is 0 where the window leaves the image
+/// and in lanes past `lanes`: an empty lane.
 template <typename T>
-void placeColumns(const cv::Mat& image, int row, double c, double slope, int h, long x0, int lanes,
-                  Columns& cols, long* first_row) {
+void placeColumns(const cv::Mat& image, const long* xs, const long* first_rows, int h, int lanes,
+                  Columns& cols) {
   const int count = 2 * h + 1;
-  const double per_column = 1.0 / slope;
-  for (int j = 0; j < kLanes; ++j) first_row[j] = firstRowOf(row, c, per_column, h, x0 + j);
   const std::size_t step = image.step1();
   for (int j = 0; j < kLanes; ++j) {
-    const long x = x0 + j, lo = first_row[j];
-    const bool inside =
-        j < lanes && x >= 0 && x < image.cols && lo >= 0 && lo + count <= image.rows;
+    const bool inside = j < lanes && xs[j] >= 0 && xs[j] < image.cols && first_rows[j] >= 0 &&
+                        first_rows[j] + count <= image.rows;
     cols.used[j] = inside ? 1.0f : 0.0f;
     if (!inside) {
       for (int i = 0; i < count; ++i) cols.v[i][j] = 0;
       continue;
     }
-    const T* pixel = image.ptr<T>(static_cast<int>(lo)) + x;
+    const T* pixel = image.ptr<T>(static_cast<int>(first_rows[j])) + xs[j];
     for (int i = 0; i < count; ++i) cols.v[i][j] = static_cast<float>(pixel[i * step]);
   }
 }
 
-/// Measures columns x0 .. x0 + lanes - 1 (placed as placeColumns() does) into `out`.
+/// Measures the `lanes` (<= kLanes) columns xs[j] from first_rows[j] on, `h` rows each side of
+/// their middles, into `out`.
 template <typename T>
-void measureColumns(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p,
-                    long x0, int lanes, AcrossColumn* out) {
-  const int h = p.half_rows;
+void measureColumns(const cv::Mat& image, const long* xs, const long* first_rows, int h, int lanes,
+                    double fit_threshold, double min_contrast, AcrossColumn* out) {
   Columns cols;
-  long first_row[kLanes];
-  placeColumns<T>(image, row, c, slope, h, x0, lanes, cols, first_row);
-  sumColumns(cols, 2 * h + 1, static_cast<float>(p.fit_threshold));
+  placeColumns<T>(image, xs, first_rows, h, lanes, cols);
+  sumColumns(cols, 2 * h + 1, static_cast<float>(fit_threshold));
   alignas(32) double offsets[kLanes];
   columnOffsets(cols, offsets);
   for (int j = 0; j < lanes; ++j) {
     AcrossColumn& m = out[j];
-    m.x = x0 + j, m.first_row = first_row[j], m.half_rows = h;
-    m.usable = cols.used[j] > 0 && cols.top[j] >= p.min_contrast && cols.sum[j] > 0;
+    m.x = xs[j], m.first_row = first_rows[j], m.half_rows = h;
+    m.usable = cols.used[j] > 0 && cols.top[j] >= min_contrast && cols.sum[j] > 0;
     m.weight = m.usable ? cols.sum[j] : 0.0;
     m.moment_x = m.weight * static_cast<double>(m.x);
-    m.moment_y = m.usable ? m.weight * (static_cast<double>(first_row[j]) + h + offsets[j]) : 0.0;
+    m.moment_y = m.usable ? m.weight * (static_cast<double>(first_rows[j]) + h + offsets[j]) : 0.0;
   }
 }
 
-template <typename T>
-bool across(const cv::Mat& image, int row, double start, double slope, const AcrossStripe& p,
-            AcrossColumns* shared, double* out) {
-  const int count = 2 * p.half_rows + 1, columns_used = 2 * p.half_columns + 1;
-  if (count > kMaxRows || columns_used > kLanes) return false;
-  AcrossColumn own[kLanes];
+/// The columns a point measures around `c`: x0 and each one's first row.
+void pointColumns(int row, double c, double slope, const AcrossStripe& p, long* xs,
+                  long* first_rows) {
+  const long x0 = std::lround(c) - p.half_columns;
+  const double per_column = 1.0 / slope;
+  for (int j = 0; j < 2 * p.half_columns + 1; ++j)
+    xs[j] = x0 + j, first_rows[j] = firstRowOf(row, c, per_column, p.half_rows, x0 + j);
+}
+
+/// Whether a point of these parameters is measured across the stripe at all.
+bool measuredAcross(double slope, const AcrossStripe& p) {
+  return std::abs(slope) >= kAcrossMinSlope && p.half_rows >= 2 &&
+         2 * p.half_rows + 1 <= kMaxRows && 2 * p.half_columns + 1 <= kLanes;
+}
+
+/// The centre across the stripe from the row's centre `start`: the signal-weighted mean of the
+/// crossings of the columns around it, each carried back to `row` along the stripe, once more
+/// around the new centre where it moved a pixel or more. columns(c, pass, measured) gives the
+/// columns around c.
+template <typename GetColumns>
+bool across(int row, double start, double slope, const AcrossStripe& p, GetColumns columns,
+            double* out) {
+  const int columns_used = 2 * p.half_columns + 1;
   double c = start;
   for (int pass = 0; pass < 2; ++pass) {
-    const long x0 = std::lround(c) - p.half_columns;
     const AcrossColumn* measured[kLanes];
-    if (shared == nullptr) {  // this point's own columns
-      measureColumns<T>(image, row, c, slope, p, x0, columns_used, own);
-      for (int j = 0; j < columns_used; ++j) measured[j] = &own[j];
-    } else {
-      shared->gather<T>(image, row, c, slope, p, x0, columns_used, measured);
-    }
+    AcrossColumn own[kLanes];
+    columns(c, pass, measured, own);
     // The signal-weighted mean of the columns' crossings, each carried back to `row` along the
     // stripe: x + slope (row - y).
     double weight = 0, moment_x = 0, moment_y = 0;
-    int columns = 0;
+    int usable = 0;
     for (int j = 0; j < columns_used; ++j) {
       const AcrossColumn& m = *measured[j];
       weight += m.weight, moment_x += m.moment_x, moment_y += m.moment_y;
-      columns += m.usable;
+      usable += m.usable;
     }
-    if (columns <= p.half_columns) return false;  // more than half the columns must see it
+    if (usable <= p.half_columns) return false;  // more than half the columns must see it
     const double moved = (moment_x + slope * (row * weight - moment_y)) / weight - c;
     c += moved;
     if (!(std::abs(c - start) <= p.max_move)) return false;
@@ -191,55 +201,99 @@ bool across(const cv::Mat& image, int row, double start, double slope, const Acr
   return true;
 }
 
-}  // namespace
-
+/// A point's own columns around c, measured now.
 template <typename T>
-void AcrossColumns::gather(const cv::Mat& image, int row, double c, double slope,
-                           const AcrossStripe& p, long x0, int columns, const AcrossColumn** out) {
-  const int h = p.half_rows;
-  // A column is reused only when it was measured with the window this point would place: then
-  // its crossing is what this point would measure. Windows a row off would be reused more often,
-  // but they tie neighbouring points' errors together (docs/speed.md).
-  const double per_column = 1.0 / slope;
-  auto cached = [&](long x) -> const AcrossColumn* {
-    const AcrossColumn& m = slots_[static_cast<std::size_t>(x) & (kSlots - 1)];
-    const bool same =
-        m.x == x && m.half_rows == h && m.first_row == firstRowOf(row, c, per_column, h, x);
-    return same ? &m : nullptr;
-  };
-  long first_missing = 0, last_missing = -1;
-  bool missing = false;
-  for (int j = 0; j < columns; ++j) {
-    if (cached(x0 + j)) continue;
-    if (!missing) first_missing = x0 + j;
-    last_missing = x0 + j, missing = true;
-  }
-  if (missing) {
-    // The slit's next points lie towards larger columns where it descends to the right
-    // (du/dv > 0): measure eight columns from the first missing one on that side.
-    const long batch = slope > 0 ? first_missing : last_missing - (kLanes - 1);
-    AcrossColumn fresh[kLanes];
-    measureColumns<T>(image, row, c, slope, p, batch, kLanes, fresh);
-    for (int j = 0; j < kLanes; ++j)
-      slots_[static_cast<std::size_t>(batch + j) & (kSlots - 1)] = fresh[j];
-  }
-  for (int j = 0; j < columns; ++j)
-    out[j] = &slots_[static_cast<std::size_t>(x0 + j) & (kSlots - 1)];
+void ownColumns(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p,
+                const AcrossColumn** measured, AcrossColumn* own) {
+  long xs[kLanes], first_rows[kLanes];
+  pointColumns(row, c, slope, p, xs, first_rows);
+  const int n = 2 * p.half_columns + 1;
+  measureColumns<T>(image, xs, first_rows, p.half_rows, n, p.fit_threshold, p.min_contrast, own);
+  for (int j = 0; j < n; ++j) measured[j] = &own[j];
 }
 
-template void AcrossColumns::gather<std::uint8_t>(const cv::Mat&, int, double, double,
-                                                  const AcrossStripe&, long, int,
-                                                  const AcrossColumn**);
-template void AcrossColumns::gather<std::uint16_t>(const cv::Mat&, int, double, double,
-                                                   const AcrossStripe&, long, int,
-                                                   const AcrossColumn**);
+constexpr std::size_t kNotAcross = std::numeric_limits<std::size_t>::max();
+constexpr std::uint32_t kNoColumn = std::numeric_limits<std::uint32_t>::max();
+
+}  // namespace
+
+void SlitColumns::clear() {
+  columns_.clear(), uses_.clear(), points_.clear();
+  std::fill(std::begin(slots_), std::end(slots_), kNoColumn);
+}
+
+void SlitColumns::plan(int row, double centre, double slope, const AcrossStripe& p) {
+  points_.emplace_back();
+  Point& point = points_.back();
+  point.row = row, point.half_rows = p.half_rows, point.start = centre, point.slope = slope;
+  point.first_use = kNotAcross;
+  if (!measuredAcross(slope, p)) return;
+  params_ = p;
+  point.first_use = uses_.size();
+  long xs[kLanes], first_rows[kLanes];
+  pointColumns(row, centre, slope, p, xs, first_rows);
+  for (int j = 0; j < 2 * p.half_columns + 1; ++j) {
+    std::uint32_t& slot = slots_[static_cast<std::size_t>(xs[j]) & (kSlots - 1)];
+    const bool same = slot != kNoColumn && columns_[slot].x == xs[j] &&
+                      columns_[slot].first_row == first_rows[j] &&
+                      columns_[slot].half_rows == p.half_rows;
+    if (!same) {
+      slot = static_cast<std::uint32_t>(columns_.size());
+      columns_.emplace_back();  // measured by measure()
+      AcrossColumn& m = columns_.back();
+      m.x = xs[j], m.first_row = first_rows[j], m.half_rows = p.half_rows;
+    }
+    uses_.push_back(slot);
+  }
+}
+
+template <typename T>
+void SlitColumns::measure(const cv::Mat& image) {
+  // Eight columns of the same window length at a time, in order of first use.
+  for (std::size_t begin = 0; begin < columns_.size();) {
+    const int h = columns_[begin].half_rows;
+    long xs[kLanes], first_rows[kLanes];
+    int lanes = 0;
+    for (; lanes < kLanes && begin + lanes < columns_.size(); ++lanes) {
+      const AcrossColumn& m = columns_[begin + lanes];
+      if (m.half_rows != h) break;
+      xs[lanes] = m.x, first_rows[lanes] = m.first_row;
+    }
+    measureColumns<T>(image, xs, first_rows, h, lanes, params_.fit_threshold, params_.min_contrast,
+                      &columns_[begin]);
+    begin += static_cast<std::size_t>(lanes);
+  }
+}
+
+template <typename T>
+bool SlitColumns::centre(const cv::Mat& image, std::size_t point, double* out) const {
+  const Point& pt = points_[point];
+  if (pt.first_use == kNotAcross) return false;
+  AcrossStripe p = params_;
+  p.half_rows = pt.half_rows;
+  auto columns = [&](double c, int pass, const AcrossColumn** measured, AcrossColumn* own) {
+    if (pass > 0) return ownColumns<T>(image, pt.row, c, pt.slope, p, measured, own);
+    for (int j = 0; j < 2 * p.half_columns + 1; ++j)
+      measured[j] = &columns_[uses_[pt.first_use + static_cast<std::size_t>(j)]];
+  };
+  return across(pt.row, pt.start, pt.slope, p, columns, out);
+}
+
+template void SlitColumns::measure<std::uint8_t>(const cv::Mat&);
+template void SlitColumns::measure<std::uint16_t>(const cv::Mat&);
+template bool SlitColumns::centre<std::uint8_t>(const cv::Mat&, std::size_t, double*) const;
+template bool SlitColumns::centre<std::uint16_t>(const cv::Mat&, std::size_t, double*) const;
 
 bool acrossStripeCentre(const cv::Mat& image, int row, double centre, double slope,
-                        const AcrossStripe& params, double* out, AcrossColumns* shared) {
-  if (!(std::abs(slope) >= kAcrossMinSlope) || params.half_rows < 2) return false;
-  return image.depth() == CV_8U
-             ? across<std::uint8_t>(image, row, centre, slope, params, shared, out)
-             : across<std::uint16_t>(image, row, centre, slope, params, shared, out);
+                        const AcrossStripe& params, double* out) {
+  if (!measuredAcross(slope, params)) return false;
+  auto columns = [&](double c, int, const AcrossColumn** measured, AcrossColumn* own) {
+    if (image.depth() == CV_8U)
+      ownColumns<std::uint8_t>(image, row, c, slope, params, measured, own);
+    else
+      ownColumns<std::uint16_t>(image, row, c, slope, params, measured, own);
+  };
+  return across(row, centre, slope, params, columns, out);
 }
 
 }  // namespace multislit

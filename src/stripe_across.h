@@ -20,7 +20,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 namespace multislit {
 
@@ -44,8 +46,7 @@ inline int acrossHalfRows(double row_half_window, double slope) {
 
 /// One column's crossing of the stripe, as measured for some point of a slit.
 struct AcrossColumn {
-  static constexpr long kNone = std::numeric_limits<long>::min();  ///< x of an empty slot
-  long x;                                                          ///< image column [px]
+  long x;           ///< image column [px]
   long first_row;   ///< first row of the window centred on its expected crossing [px]
   int half_rows;    ///< rows each side of the expected crossing [px]
   bool usable;      ///< inside the image, its contrast at least the limit, some signal
@@ -54,34 +55,44 @@ struct AcrossColumn {
   double moment_y;  ///< weight times the row where the stripe crosses it
 };
 
-/// The columns measured for the points of one slit, reused by its next points: neighbouring
-/// points of a slit (rows k and k + 1) measure columns about |du/dv| apart, so seven columns a
-/// point share four or five with the next. Measured eight at a time, ahead along the slit; a
-/// column is reused when its profile was placed where this point places it (the same rows), so
-/// every point's centre is what it would measure from its own columns.
-/// clear() before each slit and each image.
-class AcrossColumns {
+/// The columns measured across the stripe for the points of one slit, each distinct one once.
+/// Neighbouring points of a slit (rows k and k + 1) use columns about |du/dv| apart, so of a
+/// point's seven columns four or five are the previous point's. A column's crossing depends only
+/// on where its profile lies (its column, first row and length): a column is shared when its
+/// profile lies where the other point places it too, so every point's centre is what it would
+/// measure from its own columns. Per slit: clear(), plan() each point in order along it,
+/// measure() once (eight columns at a time, none twice), then centre() each planned point.
+class SlitColumns {
  public:
-  AcrossColumns() { clear(); }
-  void clear() {
-    for (AcrossColumn& m : slots_) m.x = AcrossColumn::kNone;
-  }
-  /// `columns` columns from x0 on, measured for the stripe through (`c`, `row`) of direction
-  /// `slope` with `p`'s window and limits: the cached ones where placed alike, the others now.
+  void clear();
+  /// Plans the point on `row` whose centre on the row is `centre`, of a stripe of direction
+  /// `slope` (du/dv), with `p`'s window and limits (all but half_rows the same along a slit).
+  void plan(int row, double centre, double slope, const AcrossStripe& p);
+  /// Measures every planned column in `image` (CV_8U when T is std::uint8_t, else CV_16U).
   template <typename T>
-  void gather(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p, long x0,
-              int columns, const AcrossColumn** out);
+  void measure(const cv::Mat& image);
+  /// As acrossStripeCentre() for the `point`-th planned point, from the measured columns.
+  template <typename T>
+  bool centre(const cv::Mat& image, std::size_t point, double* out) const;
 
  private:
-  static constexpr std::size_t kSlots = 32;  ///< a power of two over a point's columns and a batch
-  AcrossColumn slots_[kSlots];
+  struct Point {
+    int row, half_rows;
+    double start, slope;
+    std::size_t first_use;  ///< its columns: uses_[first_use ..]; npos: not measured across
+  };
+  static constexpr std::size_t kSlots = 32;  ///< recent columns, by column modulo kSlots
+  std::vector<AcrossColumn> columns_;        ///< distinct columns, in order of first use
+  std::vector<std::uint32_t> uses_;          ///< each point's columns, as indices into columns_
+  std::vector<Point> points_;
+  std::uint32_t slots_[kSlots];
+  AcrossStripe params_;  ///< the slit's limits (half_rows: each point's own)
 };
 
 /// The column where the stripe through (`centre`, `row`) of direction `slope` (du/dv) crosses
 /// `row`, measured from the columns' profiles of `image` (CV_8U or CV_16U). False, leaving
-/// `*out` alone, when too few columns show the stripe inside the image. With `shared`, the columns
-/// come from and go to it (the extractor's points of one slit, in order along it).
+/// `*out` alone, when too few columns show the stripe inside the image.
 bool acrossStripeCentre(const cv::Mat& image, int row, double centre, double slope,
-                        const AcrossStripe& params, double* out, AcrossColumns* shared = nullptr);
+                        const AcrossStripe& params, double* out);
 
 }  // namespace multislit

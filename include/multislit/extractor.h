@@ -13,8 +13,6 @@
 
 namespace multislit {
 
-class AcrossColumns;
-
 struct ExtractorConfig {
   Estimator estimator = Estimator::Gaussian;  ///< measured: docs/sensor-and-calibration.md
   /// Slit peak above its background [full scale]: half the paper's 0.06, so that a dark object
@@ -94,12 +92,14 @@ class Extractor {
     double u_inf = 0, du_inf_dv = 0;    ///< its u_inf (NaN: none) and that's slope
   };
 
-  /// Point `p` of task `t` from its slit's centre on the row: measured again across the stripe
-  /// (ExtractorConfig::across_stripe; the columns shared along the slit through `shared`), then dk
-  /// and, with a metric scale, x, y, z. False, and `p` left unmeasured, when the centre lies beyond
-  /// the image's edge (a fit pulled past it).
-  bool finish(const cv::Mat& image, const Task& t, double centre, const ProfileParams& params,
-              PointRDM* p, AcrossColumns* shared) const;
+  /// Point `p` of task `t` from its slit's centre: dk and, with a metric scale, x, y, z. False,
+  /// and `p` left unmeasured, when the centre lies beyond the image's edge (a fit pulled past it).
+  bool finish(const cv::Mat& image, const Task& t, double centre, PointRDM* p) const;
+  /// The centres of tasks along_slits_[begin, end) (one slit, in order along it), measured again
+  /// across the stripe (ExtractorConfig::across_stripe), the columns shared between its points.
+  template <typename T>
+  void acrossSlit(const cv::Mat& image, const ProfileParams& params, std::size_t begin,
+                  std::size_t end, double* centres) const;
   /// finish()'s last step through a distorting lens: the centre on task t's recorded row to
   /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
   /// the reference slit's ends.
