@@ -67,6 +67,7 @@ Extractor::Extractor(Reference reference, const ExtractorConfig& config)
       t.u = p.u;
       t.u_inf = has_inf && std::isfinite(slit.u_inf[k]) ? slit.u_inf[k] : nan;
       t.slope = static_cast<float>(slopeAt(slit.u, k));
+      t.across_half_rows = acrossHalfRows(halfWindow(), t.slope);
       tasks_.push_back(t);
     }
   }
@@ -230,7 +231,7 @@ void Extractor::acrossSlit(const cv::Mat& image, const ProfileParams& params, st
   for (std::size_t k = begin; k < end; ++k) {
     const Task& t = tasks_[along_slits_[k]];
     if (!std::isfinite(centres[along_slits_[k]])) continue;
-    across.half_rows = acrossHalfRows(params.half_window, t.slope);
+    across.half_rows = t.across_half_rows;
     columns.plan(t.row, centres[along_slits_[k]], t.slope, across);
   }
   columns.measure<T>(image);
@@ -255,6 +256,10 @@ void Extractor::prefetchRegions(const cv::Mat& image, std::size_t begin, std::si
   }
 }
 
+int Extractor::halfWindow() const {
+  return std::max(3, static_cast<int>(std::lround(1.25 * reference_.profile_width)));
+}
+
 ProfileParams Extractor::profileParams(int depth) const {
   const double full = config_.full_scale > 0      ? config_.full_scale
                       : reference_.full_scale > 0 ? reference_.full_scale
@@ -266,7 +271,7 @@ ProfileParams Extractor::profileParams(int depth) const {
   params.max_saturated = config_.max_saturated;
   params.min_width = config_.min_width;
   params.max_width = config_.max_width_factor * reference_.profile_width;
-  params.half_window = std::max(3, static_cast<int>(std::lround(1.25 * reference_.profile_width)));
+  params.half_window = halfWindow();
   params.window_sigma = reference_.profile_width / 2.3548;  // FWHM to sigma
   return params;
 }

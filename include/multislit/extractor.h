@@ -72,13 +72,14 @@ class Extractor {
   /// One reference point, prepared once: its assigned region on its image row (Fig. 7) and
   /// where its measure goes.
   struct Task {
-    int row = 0;              ///< image row [px]
-    int first = 0, last = 0;  ///< assigned region: first and last column [px]
-    std::uint32_t cell = 0;   ///< index of the point in the cloud
-    float u = 0;              ///< reference column [px]
-    float u_inf = 0;          ///< column of the ray at infinite depth [px]; NaN: no metric scale
-    float slope = 0;          ///< the reference slit's du/dv here [-]
-    std::uint32_t lens = 0;   ///< index into ideal_tasks_ (distorting lens only)
+    int row = 0;               ///< image row [px]
+    int first = 0, last = 0;   ///< assigned region: first and last column [px]
+    std::uint32_t cell = 0;    ///< index of the point in the cloud
+    float u = 0;               ///< reference column [px]
+    float u_inf = 0;           ///< column of the ray at infinite depth [px]; NaN: no metric scale
+    float slope = 0;           ///< the reference slit's du/dv here [-]
+    int across_half_rows = 0;  ///< rows each side of a column's crossing, across the stripe [px]
+    std::uint32_t lens = 0;    ///< index into ideal_tasks_ (distorting lens only)
   };
   /// Through a distorting lens, per task: the ideal point of a centre at column c of its
   /// recorded row, a cubic in s = (c - u) / reach (u the task's reference column) exact at
@@ -104,6 +105,8 @@ class Extractor {
   /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
   /// the reference slit's ends.
   bool finishIdeal(const Task& t, double centre, PointRDM* p) const;
+  /// Half the row's profile window [px], from the reference's stripe width.
+  int halfWindow() const;
   /// Each task's IdealTask.
   void prepareIdeal();
   template <typename T>
