@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 
 namespace multislit::detail {
 
@@ -27,8 +28,8 @@ octomap::OcTreeNode* KeyOrderUpdate::update(const octomap::OcTreeKey& key, float
   if (valid_ > 0 && path_[0] == root) {
     const unsigned differ =
         static_cast<unsigned>((key[0] ^ last_[0]) | (key[1] ^ last_[1]) | (key[2] ^ last_[2]));
-    unsigned differing_bits = 0;
-    while (differ >> differing_bits) ++differing_bits;
+    const auto differing_bits = static_cast<unsigned>(
+        differ == 0 ? 0 : std::numeric_limits<unsigned>::digits - __builtin_clz(differ));
     d = std::min(depth_ - differing_bits, valid_ - 1);
   }
   octomap::OcTreeNode* node = d == 0 ? root : path_[d];
@@ -57,7 +58,7 @@ octomap::OcTreeNode* KeyOrderUpdate::update(const octomap::OcTreeKey& key, float
   valid_ = depth_ + 1;
   last_ = key;
   if (!searched && atBound(node)) return node;
-  tree_.updateNodeLogOdds(node, log_odds);
+  tree_.OccupancyOcTreeBase::updateNodeLogOdds(node, log_odds);  // not overridden: no virtual call
   return node;
 }
 

@@ -13,7 +13,6 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
-#include <unordered_set>
 #include <utility>
 
 namespace multislit {
@@ -243,19 +242,14 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
     }
     const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << kBits);
     if (hit) {
-      e.saturated_free.erase(voxel);
       leaves.update(key, log_hit_);
       ++stats.hit_voxels;
     } else if (weak >= config_.min_weak_points) {
-      e.saturated_free.erase(voxel);
       leaves.update(key, log_weak_);
       ++stats.weak_voxels;
     } else if (weak == 0 && !pending) {
+      leaves.update(key, log_miss_);
       ++stats.free_voxels;
-      if (e.saturated_free.count(voxel)) continue;  // as octomap: no change at the bound
-      const octomap::OcTreeNode* node = leaves.update(key, log_miss_);
-      if (node && node->getLogOdds() <= tree_->getClampingThresMinLog())
-        e.saturated_free.insert(voxel);
     } else {  // evidence not consistent over the sweep, or too few weak points: unknown
       ++stats.pending_voxels;
     }
@@ -335,7 +329,6 @@ void OccupancyMap::crop(const Eigen::Vector2d& robot_xy) {
   kept->updateInnerOccupancy();
   kept->prune();
   tree_ = std::move(kept);
-  evidence_->saturated_free.clear();
   const octomap::OcTreeKey centre = tree_->coordToKey(
       octomap::point3d(static_cast<float>(robot_xy.x()), static_cast<float>(robot_xy.y()), 0.0f));
   sweep_->crop(centre[0], centre[1],
