@@ -138,14 +138,26 @@ namespace {
 bool fitAffine(const std::vector<float>& moves, const std::vector<Eigen::Vector2f>& at,
                const Eigen::Vector2d& centre, const Eigen::Vector3d& previous, double keep,
                Eigen::Vector3d& fit) {
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  // The sums of row * row^T and row * move, each added in the order of the points (the bits of
+  // adding the outer products as matrices), in registers rather than in a matrix in memory.
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, sm = 0, sxm = 0, sym = 0;
   for (std::size_t j = 0; j < moves.size(); ++j) {
-    const Eigen::Vector3d row(1.0, at[j].x() - centre.x(), at[j].y() - centre.y());
-    if (!(std::abs(moves[j] - row.dot(previous)) <= keep)) continue;
-    normal += row * row.transpose();
-    rhs += row * static_cast<double>(moves[j]);
+    // The row (1, x, y); its dot product with `previous` summed in Eigen's order.
+    const double x = at[j].x() - centre.x(), y = at[j].y() - centre.y(), m = moves[j];
+    if (!(std::abs(m - (previous[0] + x * previous[1] + y * previous[2])) <= keep)) continue;
+    n += 1.0;
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    syy += y * y;
+    sm += m;
+    sxm += x * m;
+    sym += y * m;
   }
+  Eigen::Matrix3d normal;
+  normal << n, sx, sy, sx, sxx, sxy, sy, sxy, syy;
+  const Eigen::Vector3d rhs(sm, sxm, sym);
   constexpr double kMinSpread = 1e-4;  // (1 cm)^2: the points lie along more than a line
   if (normal(0, 0) < 20 || Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
                                normal.bottomRightCorner<2, 2>() / normal(0, 0))

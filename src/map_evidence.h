@@ -15,7 +15,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <unordered_set>
 #include <vector>
 
 namespace multislit::detail {
@@ -38,10 +37,6 @@ struct FrameEvidence {
   std::vector<Slit> slits;
   std::vector<double> residual;         ///< per cloud point (floor inliers only) [px]
   std::vector<std::int8_t> weak_point;  ///< per cloud point: +1 weak above, -1 below, 0 not weak
-  /// Voxels whose leaf is at the lower clamping bound: a miss cannot change them (octomap's
-  /// updateNode() would search the tree to find that out), so it is skipped. Kept across frames;
-  /// emptied when the tree is rebuilt by crop().
-  std::unordered_set<std::uint64_t> saturated_free;
   /// This frame's points of evidence for the sweep, and the voxel each one marks.
   std::vector<SweepPoint> sweep_points;
   std::vector<octomap::OcTreeKey> sweep_keys;

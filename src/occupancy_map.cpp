@@ -2,6 +2,7 @@
 #include "multislit/plane_model.h"
 
 #include "config_check.h"
+#include "key_order_update.h"
 #include "map_evidence.h"
 
 #include <octomap/octomap_utils.h>
@@ -12,7 +13,6 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
-#include <unordered_set>
 #include <utility>
 
 namespace multislit {
@@ -225,6 +225,7 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
   MapUpdateStats stats;
   stats.inserted = true;
   e.sortMarks();
+  detail::KeyOrderUpdate leaves(*tree_);  // the voxels come in key order
   for (std::size_t i = 0; i < e.marks.size();) {
     // The marks of one voxel: a hit wins, then enough weak points; a miss only without weak
     // points (an object split between voxels lifts a few points in each).
@@ -241,19 +242,14 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
     }
     const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << kBits);
     if (hit) {
-      e.saturated_free.erase(voxel);
-      tree_->updateNode(key, log_hit_, true);
+      leaves.update(key, log_hit_);
       ++stats.hit_voxels;
     } else if (weak >= config_.min_weak_points) {
-      e.saturated_free.erase(voxel);
-      tree_->updateNode(key, log_weak_, true);
+      leaves.update(key, log_weak_);
       ++stats.weak_voxels;
     } else if (weak == 0 && !pending) {
+      leaves.update(key, log_miss_);
       ++stats.free_voxels;
-      if (e.saturated_free.count(voxel)) continue;  // as octomap: no change at the bound
-      const octomap::OcTreeNode* node = tree_->updateNode(key, log_miss_, true);
-      if (node && node->getLogOdds() <= tree_->getClampingThresMinLog())
-        e.saturated_free.insert(voxel);
     } else {  // evidence not consistent over the sweep, or too few weak points: unknown
       ++stats.pending_voxels;
     }
@@ -333,7 +329,6 @@ void OccupancyMap::crop(const Eigen::Vector2d& robot_xy) {
   kept->updateInnerOccupancy();
   kept->prune();
   tree_ = std::move(kept);
-  evidence_->saturated_free.clear();
   const octomap::OcTreeKey centre = tree_->coordToKey(
       octomap::point3d(static_cast<float>(robot_xy.x()), static_cast<float>(robot_xy.y()), 0.0f));
   sweep_->crop(centre[0], centre[1],

@@ -1,8 +1,11 @@
 // The hot kernels of the pipeline (issue 7), on simulated frames of the paper's sensor: the slit
 // search and sub-pixel measure on a real image row, the extraction of a whole frame, and the
-// floor fit of a real RDMap. Run with `cmake --build <build> --target bench`; not a test.
+// floor fit of a real RDMap, and the map update of a stretch of the walk. Run with `cmake --build
+// <build> --target bench`; not a test.
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
+#include "multislit/obstacles.h"
+#include "multislit/occupancy_map.h"
 #include "multislit/plane_model.h"
 #include "multislit/sim/scenarios.h"
 #include "multislit/sim/simulator.h"
@@ -157,12 +160,67 @@ void BM_PlaneFit(benchmark::State& state) {
 }
 BENCHMARK(BM_PlaneFit)->Unit(benchmark::kMicrosecond);
 
+/// The map update's inputs over frames 10 to 29 of the cable walk (the cable comes into the
+/// slits): each frame's RDMap, floor and obstacles found once, and the camera's pose.
+struct MapFrames {
+  std::vector<pcl::PointCloud<PointRDM>::ConstPtr> clouds;
+  std::vector<FloorResult> floors;
+  std::vector<ObstacleResult> obstacles;
+  std::vector<Eigen::Isometry3d> world_from_camera;
+  Eigen::Vector3d light = Eigen::Vector3d::Zero();  ///< the projector centre, camera frame [m]
+};
+
+const MapFrames& mapFrames() {
+  static const MapFrames f = [] {
+    MapFrames out;
+    const Simulator sim{SensorConfig{}};
+    Scenario cable = makeScenario("cable");
+    cable.step = 0.008;  // as multislit bench
+    const Eigen::Isometry3d robot_from_camera = sim.geometry().robotFromCamera(cable.mount);
+    const Extractor extractor(data().reference);
+    const FloorDetector detector;
+    const ObstacleClusterer clusterer;
+    for (std::uint64_t frame = 10; frame < 30; ++frame) {
+      const Eigen::Isometry3d world_from_camera = cable.worldFromRobot(frame) * robot_from_camera;
+      const pcl::PointCloud<PointRDM>::ConstPtr cloud =
+          extractor.extract(sim.render(cable.scene, world_from_camera, frame).image, 0, 0);
+      out.floors.push_back(detector.detect(cloud));
+      out.obstacles.push_back(clusterer.cluster(cloud, out.floors.back(), robot_from_camera));
+      out.clouds.push_back(cloud);
+      out.world_from_camera.push_back(world_from_camera);
+    }
+    out.light = sim.geometry().projectorCentre();
+    return out;
+  }();
+  return f;
+}
+
+// The map update (OccupancyMap::insertFrame: evidence, sweep, free rays, OctoMap leaves) of those
+// 20 frames into a new map; items are frames.
+void BM_MapUpdate(benchmark::State& state) {
+  const MapFrames& f = mapFrames();
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto map = std::make_unique<OccupancyMap>();
+    state.ResumeTiming();
+    for (std::size_t k = 0; k < f.clouds.size(); ++k)
+      benchmark::DoNotOptimize(map->insertFrame(*f.clouds[k], f.floors[k], f.obstacles[k],
+                                                f.world_from_camera[k], f.light));
+    state.PauseTiming();
+    map.reset();
+    state.ResumeTiming();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(f.clouds.size()));
+}
+BENCHMARK(BM_MapUpdate)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   data();  // render before timing anything
+  mapFrames();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

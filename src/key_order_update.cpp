@@ -1,0 +1,65 @@
+#include "key_order_update.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+
+namespace multislit::detail {
+
+KeyOrderUpdate::KeyOrderUpdate(octomap::OcTree& tree)
+    : tree_(tree),
+      depth_(tree.getTreeDepth()),
+      min_(tree.getClampingThresMinLog()),
+      max_(tree.getClampingThresMaxLog()) {}
+
+octomap::OcTreeNode* KeyOrderUpdate::update(const octomap::OcTreeKey& key, float log_odds) {
+  octomap::OcTreeNode* root = tree_.getRoot();
+  if (root == nullptr || depth_ > kMaxDepth) {  // updateNode() creates the root
+    valid_ = 0;
+    return tree_.updateNode(key, log_odds, true);
+  }
+  // updateNode()'s early abort: the leaf its search finds already stands at the bound.
+  const auto atBound = [&](const octomap::OcTreeNode* leaf) {
+    return (log_odds >= 0 && leaf->getLogOdds() >= max_) ||
+           (log_odds <= 0 && leaf->getLogOdds() <= min_);
+  };
+  // The deepest node on both paths: the levels above the highest bit in which the keys differ.
+  unsigned d = 0;
+  if (valid_ > 0 && path_[0] == root) {
+    const unsigned differ =
+        static_cast<unsigned>((key[0] ^ last_[0]) | (key[1] ^ last_[1]) | (key[2] ^ last_[2]));
+    const auto differing_bits = static_cast<unsigned>(
+        differ == 0 ? 0 : std::numeric_limits<unsigned>::digits - __builtin_clz(differ));
+    d = std::min(depth_ - differing_bits, valid_ - 1);
+  }
+  octomap::OcTreeNode* node = d == 0 ? root : path_[d];
+  bool searched = false;  // the search's leaf was passed and is not at the bound, or there is none
+  bool created = false;   // `node` was created by this update
+  for (; d < depth_; ++d) {
+    path_[d] = node;
+    const unsigned pos = octomap::computeChildIdx(key, static_cast<int>(depth_ - 1 - d));
+    if (!tree_.nodeChildExists(node, pos)) {
+      if (!tree_.nodeHasChildren(node) && !created) {  // a pruned leaf covers the voxel
+        if (!searched && atBound(node)) {
+          valid_ = d + 1;
+          last_ = key;
+          return node;
+        }
+        tree_.expandNode(node);
+      } else {
+        tree_.createNodeChild(node, pos);
+        created = true;
+      }
+      searched = true;
+    }
+    node = tree_.getNodeChild(node, pos);
+  }
+  path_[depth_] = node;
+  valid_ = depth_ + 1;
+  last_ = key;
+  if (!searched && atBound(node)) return node;
+  tree_.OccupancyOcTreeBase::updateNodeLogOdds(node, log_odds);  // not overridden: no virtual call
+  return node;
+}
+
+}  // namespace multislit::detail
