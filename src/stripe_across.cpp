@@ -37,6 +37,7 @@ inline float lanesLog(float x) {
 
 /// The columns' profiles, row i of column j at v[i][j], and the sums of each column's fit.
 struct Columns {
+  alignas(32) std::uint16_t pixels[kMaxRows][kLanes];  // as read: 8 or 16 bits
   alignas(32) float v[kMaxRows][kLanes];
   alignas(32) float used[kLanes];  // 1: a column inside the image, 0: a lane left empty
   // Per column: the contrast above the background line through the two pixels at each end, and
@@ -51,6 +52,8 @@ struct Columns {
 /// vector registers; AVX2 where the CPU has it).
 MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold) {
   const float half = 0.5f * static_cast<float>(count - 1);
+  for (int i = 0; i < count; ++i)
+    for (int j = 0; j < kLanes; ++j) c.v[i][j] = static_cast<float>(c.pixels[i][j]);
   alignas(32) float left[kLanes], tilt[kLanes], top[kLanes];
   for (int j = 0; j < kLanes; ++j) {
     left[j] = 0.5f * (c.v[0][j] + c.v[1][j]);
@@ -126,11 +129,12 @@ void placeColumns(const cv::Mat& image, const long* xs, const long* first_rows, 
                         first_rows[j] + count <= image.rows;
     cols.used[j] = inside ? 1.0f : 0.0f;
     if (!inside) {
-      for (int i = 0; i < count; ++i) cols.v[i][j] = 0;
+      for (int i = 0; i < count; ++i) cols.pixels[i][j] = 0;
       continue;
     }
+    // Integers here; sumColumns() turns whole rows of lanes into floats.
     const T* pixel = image.ptr<T>(static_cast<int>(first_rows[j])) + xs[j];
-    for (int i = 0; i < count; ++i) cols.v[i][j] = static_cast<float>(pixel[i * step]);
+    for (int i = 0; i < count; ++i) cols.pixels[i][j] = pixel[i * step];
   }
 }
 
