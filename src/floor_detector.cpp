@@ -236,17 +236,23 @@ void addRunObstacles(const pcl::PointCloud<PointRDM>& cloud, const FloorDetector
                                config.max_window, config.window_sigmas, config.min_window_shift);
   result.window_noise = std::move(off.sigmas);
   if (off.points.empty()) return;
-  // Both lists in the order of the inliers: one pass takes them out.
-  std::size_t next = 0, kept = 0;
+  // Both lists in the order of the inliers: one pass takes them out, the inliers between two of
+  // them moved as one block.
+  pcl::index_t* inliers = result.inliers.data();
+  const std::size_t n = result.inliers.size();
+  std::size_t from = 0, kept = 0;
   double removed_sq = 0.0;
-  for (const auto i : result.inliers) {
-    if (next < off.points.size() && off.points[next] == i) {
-      removed_sq += static_cast<double>(off.residuals[next]) * off.residuals[next];
-      ++next;
-      continue;
-    }
-    result.inliers[kept++] = i;
+  for (std::size_t next = 0; next < off.points.size(); ++next) {
+    const std::size_t at = static_cast<std::size_t>(
+        std::find(inliers + from, inliers + n, off.points[next]) - inliers);
+    if (at == n) break;  // not an inlier (cannot happen: they are taken from the inliers)
+    std::memmove(inliers + kept, inliers + from, (at - from) * sizeof *inliers);
+    kept += at - from;
+    from = at + 1;
+    removed_sq += static_cast<double>(off.residuals[next]) * off.residuals[next];
   }
+  std::memmove(inliers + kept, inliers + from, (n - from) * sizeof *inliers);
+  kept += n - from;
   const double floor_sq =
       result.residual_std * result.residual_std * static_cast<double>(result.inliers.size());
   result.inliers.resize(kept);
