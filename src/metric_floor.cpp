@@ -94,31 +94,34 @@ __attribute__((target("avx2"))) MetricSums sumAboutOriginAvx2(const PointRDM* po
   MetricSums out;
   for (std::size_t k = 0; k < n;) {
     __m256 sum = zero, squares = zero, cross = zero;
-    __m256i valid = _mm256_setzero_si256();
     for (const std::size_t stop = std::min(n, k + kFlushPoints); k < stop; k += 2) {
       const float* odd = k + 1 < stop ? points[indices[k + 1]].data : none;
       const __m256 q = _mm256_insertf128_ps(
           _mm256_castps128_ps256(_mm_loadu_ps(points[indices[k]].data)), _mm_loadu_ps(odd), 1);
       const __m256 finite = _mm256_cmp_ps(_mm256_sub_ps(q, q), zero, _CMP_EQ_OQ);
-      const __m256 keep =
-          _mm256_and_ps(_mm256_and_ps(finite, _mm256_permute_ps(finite, kRotate)),
-                        _mm256_and_ps(_mm256_permute_ps(finite, _MM_SHUFFLE(3, 1, 0, 2)), xyz));
-      const __m256 d = _mm256_and_ps(_mm256_sub_ps(q, origin), keep);
+      __m256 d = _mm256_sub_ps(q, origin);
+      // Nearly always both points have x, y, z: then lanes 0 .. 2 of each half are kept as they
+      // are (lanes 3 and 7, data[3], are summed but never read).
+      if ((_mm256_movemask_ps(finite) & 0x77) == 0x77) {
+        out.points += 2;
+      } else {
+        const __m256 keep =
+            _mm256_and_ps(_mm256_and_ps(finite, _mm256_permute_ps(finite, kRotate)),
+                          _mm256_and_ps(_mm256_permute_ps(finite, _MM_SHUFFLE(3, 1, 0, 2)), xyz));
+        d = _mm256_and_ps(d, keep);
+        out.points += static_cast<std::size_t>(__builtin_popcount(_mm256_movemask_ps(keep)) / 3);
+      }
       sum = _mm256_add_ps(sum, d);
       squares = _mm256_add_ps(squares, _mm256_mul_ps(d, d));
       cross = _mm256_add_ps(cross, _mm256_mul_ps(d, _mm256_permute_ps(d, kRotate)));
-      valid = _mm256_sub_epi32(valid, _mm256_castps_si256(keep));
     }
     alignas(32) float lanes[3][8];
     _mm256_store_ps(lanes[0], sum);
     _mm256_store_ps(lanes[1], squares);
     _mm256_store_ps(lanes[2], cross);
-    alignas(32) std::int32_t counts[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(counts), valid);
     addLanePairs(out.sum, lanes[0], lanes[0] + 4);
     addLanePairs(out.squares, lanes[1], lanes[1] + 4);
     addLanePairs(out.cross, lanes[2], lanes[2] + 4);
-    out.points += static_cast<std::size_t>(counts[0] + counts[4]);
   }
   return out;
 }
