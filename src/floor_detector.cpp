@@ -133,11 +133,30 @@ ResidualHistogram residualHistogram(const pcl::PointCloud<PointRDM>& cloud,
   h.width = band / static_cast<double>(ResidualHistogram::kBins);
   const float a = static_cast<float>(plane[0]), b = static_cast<float>(plane[1]),
               c = static_cast<float>(plane[2]), scale = static_cast<float>(1.0 / h.width);
-  for (const auto i : valid) {
-    const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    const float bin = std::abs(planeResidual(p, a, b, c)) * scale;  // float like split()
-    if (bin < static_cast<float>(ResidualHistogram::kBins))
-      ++h.counts[static_cast<std::size_t>(bin)];
+  const auto bins = static_cast<float>(ResidualHistogram::kBins);
+  const PointRDM* points = cloud.points.data();
+  const pcl::index_t* ids = valid.data();
+  const std::size_t n = valid.size();
+  // Four points at a time with the float operations of the one-point bin below (float like
+  // split()); a lane beyond the band adds to bin 0 nothing.
+  const __m128 va = _mm_set1_ps(a), vb = _mm_set1_ps(b), vc = _mm_set1_ps(c);
+  const __m128 vscale = _mm_set1_ps(scale), vbins = _mm_set1_ps(bins), sign = _mm_set1_ps(-0.0f);
+  std::size_t k = 0;
+  for (; k + 4 <= n; k += 4) {
+    const simd::UVDK4 p =
+        simd::loadUVDK(points[ids[k]], points[ids[k + 1]], points[ids[k + 2]], points[ids[k + 3]]);
+    const __m128 bin = _mm_mul_ps(_mm_andnot_ps(sign, simd::planeResiduals(p, va, vb, vc)), vscale);
+    const int in = _mm_movemask_ps(_mm_cmplt_ps(bin, vbins));
+    alignas(16) std::int32_t at[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(at), _mm_cvttps_epi32(bin));
+    for (int j = 0; j < 4; ++j) {
+      const bool inside = (in >> j) & 1;
+      h.counts[inside ? static_cast<std::size_t>(at[j]) : 0] += inside;
+    }
+  }
+  for (; k < n; ++k) {
+    const float bin = std::abs(planeResidual(points[ids[k]], a, b, c)) * scale;
+    if (bin < bins) ++h.counts[static_cast<std::size_t>(bin)];
   }
   return h;
 }
@@ -217,17 +236,23 @@ void addRunObstacles(const pcl::PointCloud<PointRDM>& cloud, const FloorDetector
                                config.max_window, config.window_sigmas, config.min_window_shift);
   result.window_noise = std::move(off.sigmas);
   if (off.points.empty()) return;
-  // Both lists in the order of the inliers: one pass takes them out.
-  std::size_t next = 0, kept = 0;
+  // Both lists in the order of the inliers: one pass takes them out, the inliers between two of
+  // them moved as one block.
+  pcl::index_t* inliers = result.inliers.data();
+  const std::size_t n = result.inliers.size();
+  std::size_t from = 0, kept = 0;
   double removed_sq = 0.0;
-  for (const auto i : result.inliers) {
-    if (next < off.points.size() && off.points[next] == i) {
-      removed_sq += static_cast<double>(off.residuals[next]) * off.residuals[next];
-      ++next;
-      continue;
-    }
-    result.inliers[kept++] = i;
+  for (std::size_t next = 0; next < off.points.size(); ++next) {
+    const std::size_t at = static_cast<std::size_t>(
+        std::find(inliers + from, inliers + n, off.points[next]) - inliers);
+    if (at == n) break;  // not an inlier (cannot happen: they are taken from the inliers)
+    std::memmove(inliers + kept, inliers + from, (at - from) * sizeof *inliers);
+    kept += at - from;
+    from = at + 1;
+    removed_sq += static_cast<double>(off.residuals[next]) * off.residuals[next];
   }
+  std::memmove(inliers + kept, inliers + from, (n - from) * sizeof *inliers);
+  kept += n - from;
   const double floor_sq =
       result.residual_std * result.residual_std * static_cast<double>(result.inliers.size());
   result.inliers.resize(kept);
@@ -279,6 +304,25 @@ FloorResult detectWith(SampleConsensusModelRDMapPlane& model, const FloorDetecto
   return result;
 }
 
+/// detectWith() on the model of this thread, given `cloud` (and `indices`) for this call only. The
+/// model is kept from frame to frame: building one per frame (PCL's sampler and its seeding, the
+/// index and point arrays) took about a tenth of the stage. detectWith() reseeds its draws, so
+/// each frame's result is that of a new model.
+FloorResult detectOnThreadModel(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
+                                const pcl::Indices* indices, const FloorDetectorConfig& config,
+                                int q) {
+  thread_local SampleConsensusModelRDMapPlane model{pcl::PointCloud<PointRDM>::ConstPtr()};
+  struct Release {  // the model holds no cloud between calls, also when one throws
+    SampleConsensusModelRDMapPlane& model;
+    ~Release() { model.setInputCloud(nullptr); }
+  } release{model};
+  if (indices)
+    model.setInputCloud(cloud, *indices);
+  else
+    model.setInputCloud(cloud);
+  return detectWith(model, config, q);
+}
+
 }  // namespace
 
 int ransacIterations(double probability, double outlier_ratio, int sample_size) {
@@ -327,15 +371,13 @@ FloorDetector::FloorDetector(const FloorDetectorConfig& config) : config_(config
 
 FloorResult FloorDetector::detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud) const {
   if (!cloud) return {};
-  SampleConsensusModelRDMapPlane model(cloud);
-  return detectWith(model, config_, iterations_);
+  return detectOnThreadModel(cloud, nullptr, config_, iterations_);
 }
 
 FloorResult FloorDetector::detect(const pcl::PointCloud<PointRDM>::ConstPtr& cloud,
                                   const pcl::Indices& indices) const {
   if (!cloud) return {};
-  SampleConsensusModelRDMapPlane model(cloud, indices);
-  return detectWith(model, config_, iterations_);
+  return detectOnThreadModel(cloud, &indices, config_, iterations_);
 }
 
 }  // namespace multislit

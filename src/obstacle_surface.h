@@ -17,7 +17,7 @@ namespace multislit::detail {
 /// neighbouring rows (a gap of one row allowed), all on one side of the floor `plane` (A, B, C:
 /// dk = A u + B v + C), each within `max_step` px of dk of the one before it in the run; points
 /// off the run in between are passed over. In ascending order.
-pcl::Indices surfacePoints(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices group,
+pcl::Indices surfacePoints(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& group,
                            const Eigen::Vector3d& plane, double max_step, int min_run);
 
 }  // namespace multislit::detail

@@ -8,15 +8,11 @@
 #include <pcl/search/kdtree.h>
 #include <pcl/segmentation/extract_clusters.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <numeric>
-#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -27,8 +23,11 @@ namespace {
 /// Disjoint sets over 0 .. n-1 (union by size, path halving).
 class DisjointSets {
  public:
-  explicit DisjointSets(std::size_t n) : parent_(n), size_(n, 1) {
+  /// n singletons, in the arrays of earlier calls.
+  void reset(std::size_t n) {
+    parent_.resize(n);
     std::iota(parent_.begin(), parent_.end(), std::size_t{0});
+    size_.assign(n, 1);
   }
   std::size_t find(std::size_t i) {
     while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
@@ -47,55 +46,21 @@ class DisjointSets {
   std::vector<std::size_t> parent_, size_;
 };
 
-/// The sums over the points with x, y, z among points[indices[0 .. n)] of x, y, z, of their squares
-/// (xx, yy, zz) and of their cross products (xy, yz, zx), taken about (x0, y0, z0) so that they
-/// stay small.
-struct XYZSums {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), squares = Eigen::Vector3d::Zero(),
-                  cross = Eigen::Vector3d::Zero();
-  std::size_t points = 0;
+/// The buffers of the grid grouping, kept from frame to frame (one per thread): the stage runs on
+/// every frame, and allocating them took as long as the grouping itself.
+struct GridWorkspace {
+  pcl::Indices sorted;                                        ///< the obstacle points, ascending
+  std::vector<char> in_run;                                   ///< per point: run >= min_run
+  std::vector<std::size_t> slit_start;                        ///< per slit: its first point
+  std::vector<std::pair<std::size_t, std::size_t>> links;     ///< neighbours not both in runs
+  std::vector<std::size_t> next_start, next_to, seed, queue;  ///< growFromRuns
+  std::vector<std::size_t> group_of;                          ///< per set root: its group
+  DisjointSets sets;
 };
 
-/// One pass in float with four lanes (x, y, z, 0) per point, added to double every kFlush points,
-/// which keeps the sums accurate to ~1e-7. Two sets of lanes take the points in turn, so that each
-/// add need not wait for the one before.
-XYZSums sumXYZ(const PointRDM* points, const pcl::index_t* indices, std::size_t n, float x0,
-               float y0, float z0) {
-  typedef float F4 __attribute__((vector_size(16)));
-  typedef std::int32_t I4 __attribute__((vector_size(16)));
-  constexpr std::size_t kFlush = 64;
-  const I4 xyz = {-1, -1, -1, 0};
-  const F4 origin = {x0, y0, z0, 0.0f};
-  struct Lanes {
-    F4 sum = {}, squares = {}, cross = {};
-    std::size_t points = 0;
-  };
-  // p minus the origin, as (x, y, z, 0); (0, 0, 0, 0) when p has no x, y, z, which adds nothing.
-  const auto add = [&](Lanes& lanes, const PointRDM& p) {
-    const bool ok = hasXYZ(p);
-    F4 q;  // (x, y, z, data[3])
-    std::memcpy(&q, p.data, sizeof q);
-    const F4 d = (F4)((I4)(q - origin) & (ok ? xyz : I4{}));
-    lanes.sum += d;
-    lanes.squares += d * d;
-    lanes.cross += d * __builtin_shufflevector(d, d, 1, 2, 0, 3);  // (xy, yz, zx, 0)
-    lanes.points += ok;
-  };
-  XYZSums out;
-  for (std::size_t k = 0; k < n;) {
-    Lanes even, odd;
-    for (const std::size_t stop = std::min(n, k + kFlush); k < stop; k += 2) {
-      add(even, points[indices[k]]);
-      if (k + 1 < stop) add(odd, points[indices[k + 1]]);
-    }
-    for (int axis = 0; axis < 3; ++axis) {
-      out.sum[axis] += static_cast<double>(even.sum[axis]) + odd.sum[axis];
-      out.squares[axis] += static_cast<double>(even.squares[axis]) + odd.squares[axis];
-      out.cross[axis] += static_cast<double>(even.cross[axis]) + odd.cross[axis];
-    }
-    out.points += even.points + odd.points;
-  }
-  return out;
+GridWorkspace& gridWorkspace() {
+  thread_local GridWorkspace w;
+  return w;
 }
 
 }  // namespace
@@ -122,38 +87,6 @@ std::size_t ObstacleResult::pointCount() const {
   return n;
 }
 
-MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& inliers) {
-  MetricFloor floor;
-  const std::size_t n = inliers.size();
-  std::size_t first = 0;
-  while (first < n && !hasXYZ(cloud[static_cast<std::size_t>(inliers[first])])) ++first;
-  if (first == n) return floor;
-  // The sums about the first floor point with x, y, z: it lies among the others.
-  const PointRDM& o = cloud[static_cast<std::size_t>(inliers[first])];
-  const XYZSums sums =
-      sumXYZ(cloud.points.data(), inliers.data() + first, n - first, o.x, o.y, o.z);
-  floor.points = sums.points;
-  if (floor.points < 3) return floor;
-  const Eigen::Vector3d origin(o.x, o.y, o.z);
-  const double count = static_cast<double>(floor.points);
-  const Eigen::Vector3d mean = sums.sum / count;  // about the origin
-  Eigen::Matrix3d covariance;
-  covariance << sums.squares[0], sums.cross[0], sums.cross[2], sums.cross[0], sums.squares[1],
-      sums.cross[1], sums.cross[2], sums.cross[1], sums.squares[2];
-  covariance = covariance / count - mean * mean.transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  // The plane's normal is the axis of least spread; the two others must spread (not a line).
-  if (eigen.eigenvalues()(1) <= 1e-12) return floor;
-  floor.normal = eigen.eigenvectors().col(0).normalized();
-  floor.offset = -floor.normal.dot(mean + origin);
-  if (floor.offset < 0) {  // the camera (the origin) is above the floor
-    floor.normal = -floor.normal;
-    floor.offset = -floor.offset;
-  }
-  floor.valid = true;
-  return floor;
-}
-
 ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config, const FootConfig& feet)
     : config_(config), feet_(feet) {
   config_.validate();
@@ -162,62 +95,83 @@ ObstacleClusterer::ObstacleClusterer(const ObstacleClustererConfig& config, cons
 
 namespace {
 
-/// For each of the points `sorted` (cloud indices in ascending order), the length of its run: the
-/// points of one slit (one cloud row) on neighbouring rows, a gap of one row allowed; with `plane`
-/// (A, B, C) given, only points on one side of it (the sign of dk - (A u + B v + C)) make a run.
-std::vector<int> runLengths(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& sorted,
-                            const Eigen::Vector3d* plane) {
+/// Calls run(start, end) for each run [start, end) of the points `sorted` (cloud indices in
+/// ascending order): the points of one slit (one cloud row) on neighbouring rows, a gap of one row
+/// allowed; with `plane` (A, B, C) given, only points on one side of it (the sign of
+/// dk - (A u + B v + C)) make a run.
+template <typename Run>
+void forEachRun(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& sorted,
+                const Eigen::Vector3d* plane, Run&& run) {
   const auto width = static_cast<pcl::index_t>(cloud.width);
   const auto above = [&](pcl::index_t i) {
     return planeResidual(cloud[static_cast<std::size_t>(i)], *plane) > 0;
   };
-  std::vector<int> length(sorted.size());
   std::size_t start = 0;
   for (std::size_t i = 1; i <= sorted.size(); ++i) {
     const bool continues = i < sorted.size() && sorted[i] / width == sorted[i - 1] / width &&
                            sorted[i] - sorted[i - 1] <= 2 &&
                            (!plane || above(sorted[i]) == above(sorted[i - 1]));
     if (continues) continue;
-    std::fill(length.begin() + static_cast<std::ptrdiff_t>(start),
-              length.begin() + static_cast<std::ptrdiff_t>(i), static_cast<int>(i - start));
+    run(start, i);
     start = i;
   }
-  return length;
 }
 
-/// The longest run (runLengths) among the points of `group`.
-int longestRun(const pcl::PointCloud<PointRDM>& cloud, pcl::Indices group,
+/// The longest run (forEachRun) among the points of `group`.
+int longestRun(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& group,
                const Eigen::Vector3d* plane) {
-  std::sort(group.begin(), group.end());
-  const std::vector<int> length = runLengths(cloud, group, plane);
-  return length.empty() ? 0 : *std::max_element(length.begin(), length.end());
+  const pcl::Indices* sorted = &group;
+  thread_local pcl::Indices copy;  // only for a group not in ascending order
+  if (!std::is_sorted(group.begin(), group.end())) {
+    copy.assign(group.begin(), group.end());
+    std::sort(copy.begin(), copy.end());
+    sorted = &copy;
+  }
+  std::size_t longest = 0;
+  forEachRun(cloud, *sorted, plane,
+             [&](std::size_t start, std::size_t end) { longest = std::max(longest, end - start); });
+  return static_cast<int>(longest);
 }
 
-/// Each point of `links` (pairs of neighbours) that lies in no run (in_run false) joins the group
-/// of the nearest point in a run at most `max_hops` links away, reached first, and that group
+/// Each point of ws.links (pairs of neighbours) that lies in no run (ws.in_run false) joins the
+/// group of the nearest point in a run at most `max_hops` links away, reached first, and that group
 /// only: points in no run neither chain groups together nor reach further. Those no run reaches
 /// are grouped with their neighbours as before.
-void growFromRuns(const std::vector<char>& in_run,
-                  const std::vector<std::pair<std::size_t, std::size_t>>& links, int max_hops,
-                  DisjointSets& sets) {
+void growFromRuns(GridWorkspace& ws, int max_hops) {
+  const std::vector<char>& in_run = ws.in_run;
   const std::size_t n = in_run.size();
-  std::vector<std::vector<std::size_t>> next_to(n);
-  for (const auto& [a, b] : links) next_to[a].push_back(b), next_to[b].push_back(a);
-  std::vector<std::size_t> seed(n, n), frontier;
+  // The neighbours of each point, in the order of the links: those of j are
+  // next_to[next_start[j] .. next_start[j + 1]).
+  std::vector<std::size_t>& start = ws.next_start;
+  start.assign(n + 1, 0);
+  for (const auto& [a, b] : ws.links) ++start[a + 1], ++start[b + 1];
+  for (std::size_t j = 0; j < n; ++j) start[j + 1] += start[j];
+  ws.next_to.resize(start[n]);
+  ws.queue.assign(start.begin(), start.end() - 1);  // where the next neighbour of each goes
+  for (const auto& [a, b] : ws.links) ws.next_to[ws.queue[a]++] = b, ws.next_to[ws.queue[b]++] = a;
+  // Breadth first from the points in runs, one hop at a time: queue[begin, end) is the frontier.
+  std::vector<std::size_t>& seed = ws.seed;
+  seed.assign(n, n);
+  ws.queue.clear();
   for (std::size_t j = 0; j < n; ++j)
-    if (in_run[j]) seed[j] = j, frontier.push_back(j);
-  for (int hop = 1; hop <= max_hops && !frontier.empty(); ++hop) {
-    std::vector<std::size_t> reached;
-    for (const std::size_t a : frontier)
-      for (const std::size_t b : next_to[a])
-        if (seed[b] == n) seed[b] = seed[a], reached.push_back(b);
-    frontier.swap(reached);
+    if (in_run[j]) seed[j] = j, ws.queue.push_back(j);
+  std::size_t begin = 0, end = ws.queue.size();
+  for (int hop = 1; hop <= max_hops && begin < end; ++hop) {
+    for (std::size_t f = begin; f < end; ++f) {
+      const std::size_t a = ws.queue[f];
+      for (std::size_t k = start[a]; k < start[a + 1]; ++k) {
+        const std::size_t b = ws.next_to[k];
+        if (seed[b] == n) seed[b] = seed[a], ws.queue.push_back(b);
+      }
+    }
+    begin = end;
+    end = ws.queue.size();
   }
   for (std::size_t j = 0; j < n; ++j)
-    if (!in_run[j] && seed[j] < n) sets.join(j, seed[j]);
+    if (!in_run[j] && seed[j] < n) ws.sets.join(j, seed[j]);
   // What no run reaches stays together as before, a group of noise that the run rule rejects.
-  for (const auto& [a, b] : links)
-    if (seed[a] == n && seed[b] == n) sets.join(a, b);
+  for (const auto& [a, b] : ws.links)
+    if (seed[a] == n && seed[b] == n) ws.sets.join(a, b);
 }
 
 }  // namespace
@@ -231,18 +185,19 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
   result.floor = fitMetricFloor(*cloud, floor.inliers);
   // Group the points off the floor.
   const Eigen::Vector3d* plane = config_.run_one_side ? &floor.plane : nullptr;
-  const std::vector<pcl::Indices> groups = config_.method == ClusterMethod::Grid
-                                               ? gridGroups(*cloud, floor.obstacles, plane)
-                                               : euclideanGroups(*cloud, floor.obstacles);
+  std::vector<pcl::Indices> groups = config_.method == ClusterMethod::Grid
+                                         ? gridGroups(*cloud, floor.obstacles, plane)
+                                         : euclideanGroups(*cloud, floor.obstacles);
   // Reject groups too small to be real, then size and place the others.
-  for (const pcl::Indices& group : groups) {
+  for (pcl::Indices& group : groups) {
     if (group.size() < static_cast<std::size_t>(config_.min_points) ||
         longestRun(*cloud, group, plane) < config_.min_run) {
       ++result.rejected_groups;
       result.rejected.insert(result.rejected.end(), group.begin(), group.end());
       continue;
     }
-    result.obstacles.push_back(describe(*cloud, floor, result.floor, group, robot_from_camera));
+    result.obstacles.push_back(
+        describe(*cloud, floor, result.floor, std::move(group), robot_from_camera));
   }
   const auto distance = [](const Obstacle& o) {  // unplaced (NaN) last
     return std::isnan(o.distance) ? std::numeric_limits<double>::infinity() : o.distance;
@@ -255,48 +210,57 @@ ObstacleResult ObstacleClusterer::cluster(const pcl::PointCloud<PointRDM>::Const
 std::vector<pcl::Indices> ObstacleClusterer::gridGroups(const pcl::PointCloud<PointRDM>& cloud,
                                                         const pcl::Indices& points,
                                                         const Eigen::Vector3d* plane) const {
-  // Cloud row = slit, column = position along the slit (one image row each).
-  const std::size_t width = cloud.width;
-  std::vector<std::vector<std::size_t>> by_slit(cloud.height);
-  pcl::Indices sorted = points;
+  GridWorkspace& ws = gridWorkspace();
+  pcl::Indices& sorted = ws.sorted;
+  sorted.assign(points.begin(), points.end());
   std::sort(sorted.begin(), sorted.end());
-  for (std::size_t j = 0; j < sorted.size(); ++j)
-    by_slit[static_cast<std::size_t>(sorted[j]) / width].push_back(j);
-  const std::vector<int> run = runLengths(cloud, sorted, plane);
-  std::vector<char> in_run(sorted.size());
-  for (std::size_t j = 0; j < sorted.size(); ++j) in_run[j] = run[j] >= config_.min_run;
+  const std::size_t n = sorted.size();
+  // Cloud row = slit, column = position along the slit (one image row each): the points of slit s
+  // are sorted[slit_start[s] .. slit_start[s + 1]).
+  const std::size_t width = cloud.width, slits = cloud.height;
+  ws.slit_start.assign(slits + 1, 0);
+  for (const auto i : sorted) ++ws.slit_start[static_cast<std::size_t>(i) / width + 1];
+  for (std::size_t s = 0; s < slits; ++s) ws.slit_start[s + 1] += ws.slit_start[s];
+  ws.in_run.resize(n);
+  forEachRun(cloud, sorted, plane, [&](std::size_t start, std::size_t end) {
+    const bool long_enough = end - start >= static_cast<std::size_t>(config_.min_run);
+    std::fill(ws.in_run.begin() + static_cast<std::ptrdiff_t>(start),
+              ws.in_run.begin() + static_cast<std::ptrdiff_t>(end), long_enough);
+  });
   // Points in runs are joined directly; the links of the others are kept for growFromRuns.
-  DisjointSets sets(sorted.size());
-  std::vector<std::pair<std::size_t, std::size_t>> links;
+  ws.sets.reset(n);
+  ws.links.clear();
   const auto link = [&](std::size_t a, std::size_t b) {
-    if (in_run[a] && in_run[b])
-      sets.join(a, b);
+    if (ws.in_run[a] && ws.in_run[b])
+      ws.sets.join(a, b);
     else
-      links.emplace_back(a, b);
+      ws.links.emplace_back(a, b);
   };
   const double r2 = config_.slit_link_radius * config_.slit_link_radius;
-  for (std::size_t s = 0; s < by_slit.size(); ++s) {
-    const std::vector<std::size_t>& here = by_slit[s];
+  for (std::size_t s = 0; s < slits; ++s) {
+    const std::size_t first = ws.slit_start[s], last = ws.slit_start[s + 1];
     // Along the slit: at most max_gap cells between neighbours.
-    for (std::size_t a = 1; a < here.size(); ++a)
-      if (sorted[here[a]] - sorted[here[a - 1]] <= config_.max_gap + 1) link(here[a - 1], here[a]);
-    if (s + 1 >= by_slit.size()) continue;
+    for (std::size_t a = first + 1; a < last; ++a)
+      if (sorted[a] - sorted[a - 1] <= config_.max_gap + 1) link(a - 1, a);
+    if (s + 1 >= slits) continue;
     // Across to the next slit: reference positions close in the image.
-    for (const std::size_t a : here) {
+    for (std::size_t a = first; a < last; ++a) {
       const PointRDM& p = cloud[static_cast<std::size_t>(sorted[a])];
-      for (const std::size_t b : by_slit[s + 1]) {
+      for (std::size_t b = last; b < ws.slit_start[s + 2]; ++b) {
         const PointRDM& q = cloud[static_cast<std::size_t>(sorted[b])];
         const double du = p.u - q.u, dv = p.v - q.v;
         if (du * du + dv * dv <= r2) link(a, b);
       }
     }
   }
-  growFromRuns(in_run, links, config_.max_hops, sets);
+  growFromRuns(ws, config_.max_hops);
+  // One group per set, in the order of their first points; each in ascending order.
   std::vector<pcl::Indices> groups;
-  std::vector<std::size_t> group_of(sorted.size(), std::numeric_limits<std::size_t>::max());
-  for (std::size_t j = 0; j < sorted.size(); ++j) {
-    std::size_t& g = group_of[sets.find(j)];
-    if (g == std::numeric_limits<std::size_t>::max()) {
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  ws.group_of.assign(n, kNone);
+  for (std::size_t j = 0; j < n; ++j) {
+    std::size_t& g = ws.group_of[ws.sets.find(j)];
+    if (g == kNone) {
       g = groups.size();
       groups.emplace_back();
     }
@@ -343,14 +307,16 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
   o.min.setConstant(inf);
   o.max.setConstant(-inf);
   o.distance = inf;
-  std::vector<double> heights;
-  std::set<int> slits;
+  thread_local std::vector<double> heights;  // kept from frame to frame
+  thread_local std::vector<int> slits;
+  heights.clear();
+  slits.clear();
   const auto height = [&](const Eigen::Vector3d& camera) {
     return metric.valid ? metric.height(camera) : (robot_from_camera * camera).z();
   };
   for (const auto i : indices) {
     const PointRDM& p = cloud[static_cast<std::size_t>(i)];
-    slits.insert(p.slit);
+    slits.push_back(p.slit);
     const double residual = planeResidual(p, floor.plane);
     o.max_residual = std::max(o.max_residual, std::abs(residual));
     if (!hasXYZ(p)) continue;
@@ -364,7 +330,8 @@ Obstacle ObstacleClusterer::describe(const pcl::PointCloud<PointRDM>& cloud,
     const double dy = std::max(0.0, std::abs(robot.y()) - feet_.halfWidth());
     o.distance = std::min(o.distance, std::hypot(dx, dy));
   }
-  o.slits = static_cast<int>(slits.size());
+  std::sort(slits.begin(), slits.end());
+  o.slits = static_cast<int>(std::unique(slits.begin(), slits.end()) - slits.begin());
   if (!heights.empty()) {
     o.centroid /= static_cast<double>(heights.size());
     o.length = o.max.x() - o.min.x();

@@ -134,15 +134,29 @@ SampleConsensusModelRDMapPlane::SampleConsensusModelRDMapPlane(const PointCloudC
   model_name_ = "SampleConsensusModelRDMapPlane";
   sample_size_ = kSampleSize;
   model_size_ = kModelSize;
-  input_ = cloud;
-  indices_ = std::make_shared<pcl::Indices>(indices);
-  cacheValidPoints(true);
+  setInputCloud(cloud, indices);
 }
 
 void SampleConsensusModelRDMapPlane::setInputCloud(const PointCloudConstPtr& cloud) {
   input_ = cloud;
-  indices_ = std::make_shared<pcl::Indices>();
+  ownIndices();
   cacheValidPoints(false);
+}
+
+void SampleConsensusModelRDMapPlane::setInputCloud(const PointCloudConstPtr& cloud,
+                                                   const pcl::Indices& indices) {
+  input_ = cloud;
+  if (&indices != indices_.get()) {
+    ownIndices();
+    indices_->assign(indices.begin(), indices.end());
+  }
+  cacheValidPoints(true);
+}
+
+void SampleConsensusModelRDMapPlane::ownIndices() {
+  // cached_indices_ is this model's second hold on the cached vector.
+  const long held = indices_ && indices_ == cached_indices_ ? 2 : 1;
+  if (!indices_ || indices_.use_count() > held) indices_ = std::make_shared<pcl::Indices>();
 }
 
 void SampleConsensusModelRDMapPlane::cacheValidPoints(bool among_indices) {

@@ -193,10 +193,13 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
   }
   if (!looked) return out;
   // Counted first: the lists are then allocated once, and written only where marked (rarely).
+  // Only candidate cells are marked (the others hold NaN), so the cells are counted in order,
+  // without reading them through the candidates' indices.
   const std::uint8_t* off = ws.off.data();
   const float* residuals = r.data();
   std::size_t marked = 0;
-  for (const auto i : candidates) marked += off[static_cast<std::size_t>(i)];
+  for (std::size_t k = 0; k < ws.off.size(); ++k) marked += off[k];
+  if (marked == 0) return out;
   out.points.reserve(marked);
   out.residuals.reserve(marked);
   for (const auto i : candidates) {

@@ -1,7 +1,7 @@
 // The hot kernels of the pipeline (issue 7), on simulated frames of the paper's sensor: the slit
 // search and sub-pixel measure on a real image row, the extraction of a whole frame, and the
-// floor fit of a real RDMap, and the map update of a stretch of the walk. Run with `cmake --build
-// <build> --target bench`; not a test.
+// floor fit and the obstacle groups of a real RDMap, and the map update of a stretch of the walk.
+// Run with `cmake --build <build> --target bench`; not a test.
 #include "multislit/extractor.h"
 #include "multislit/floor_detector.h"
 #include "multislit/obstacles.h"
@@ -213,6 +213,18 @@ void BM_MapUpdate(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(f.clouds.size()));
 }
 BENCHMARK(BM_MapUpdate)->Unit(benchmark::kMicrosecond);
+
+// The obstacle points of a real RDMap (its floor found once) grouped, sized and placed.
+void BM_ObstacleCluster(benchmark::State& state) {
+  const Data& d = data();
+  const FloorResult floor = FloorDetector().detect(d.cloud);
+  const ObstacleClusterer clusterer;
+  const Eigen::Isometry3d robot_from_camera = Eigen::Isometry3d::Identity();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(clusterer.cluster(d.cloud, floor, robot_from_camera));
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(floor.obstacles.size()));
+}
+BENCHMARK(BM_ObstacleCluster)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -80,6 +80,9 @@ class SampleConsensusModelRDMapPlane : public pcl::SampleConsensusModel<PointRDM
   /// Sets the cloud and makes the indices all of its valid points (any earlier indices are
   /// dropped, unlike PCL's base class, which keeps indices that belong to the previous cloud).
   void setInputCloud(const PointCloudConstPtr& cloud) override;
+  /// Sets the cloud and makes the indices the valid points among `indices`. A model kept from
+  /// frame to frame and given each frame's cloud by these two reuses its arrays.
+  void setInputCloud(const PointCloudConstPtr& cloud, const pcl::Indices& indices);
 
   /// Restarts the sample draws from `seed`: the same seed and cloud give the same samples.
   void setSeed(unsigned seed);
@@ -131,6 +134,8 @@ class SampleConsensusModelRDMapPlane : public pcl::SampleConsensusModel<PointRDM
   /// residual loops then run over memory in order and vectorize, and float sums of centred values
   /// stay accurate.
   void cacheValidPoints(bool among_indices);
+  /// indices_ ready to be rewritten: its vector when no one else holds it, else a new one.
+  void ownIndices();
   /// False once setIndices() replaced the cached indices: then the loops read the cloud.
   bool cached() const { return indices_ == cached_indices_; }
   /// C of the model for the centred arrays: dk - mean_dk = A (u - mean_u) + B (v - mean_v) + C'.
