@@ -123,7 +123,8 @@ struct FloorResult {
   int iterations = 0;            ///< RANSAC iterations run
 };
 
-/// The floor of an RDMap and the points off it. Thread-safe: detect() keeps no state.
+/// The floor of an RDMap and the points off it. Thread-safe: detect()'s result depends
+/// only on its arguments (its scratch buffers are per thread).
 class FloorDetector {
  public:
   explicit FloorDetector(const FloorDetectorConfig& config = {});  ///< validates `config`

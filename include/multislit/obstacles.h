@@ -115,7 +115,8 @@ struct ObstacleResult {
 /// floor inliers (principal axes), its normal turned to the camera.
 MetricFloor fitMetricFloor(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& inliers);
 
-/// Groups the obstacle points of a FloorResult into obstacles. Thread-safe: keeps no state.
+/// Groups the obstacle points of a FloorResult into obstacles. Thread-safe: a result depends only
+/// on the arguments (scratch buffers are per thread).
 class ObstacleClusterer {
  public:
   /// `feet`: the robot's feet, which Obstacle::distance is measured from. Validates both.
