@@ -15,13 +15,7 @@ pcl::Indices surfacePoints(const pcl::PointCloud<PointRDM>& cloud, const pcl::In
   thread_local pcl::Indices copy;
   thread_local std::vector<std::size_t> run;
   thread_local std::vector<int> length;
-  const pcl::Indices* in_order = &group;
-  if (!std::is_sorted(group.begin(), group.end())) {
-    copy.assign(group.begin(), group.end());
-    std::sort(copy.begin(), copy.end());
-    in_order = &copy;
-  }
-  const pcl::Indices& sorted = *in_order;
+  const pcl::Indices& sorted = inAscendingOrder(group, copy);
   const auto width = static_cast<pcl::index_t>(cloud.width);
   const auto at = [&](std::size_t j) -> const PointRDM& {
     return cloud[static_cast<std::size_t>(sorted[j])];

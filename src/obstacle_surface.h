@@ -11,7 +11,18 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
+
 namespace multislit::detail {
+
+/// `indices` in ascending order: `indices` itself where it already is (groups usually are), else
+/// a sorted copy made in `copy`.
+inline const pcl::Indices& inAscendingOrder(const pcl::Indices& indices, pcl::Indices& copy) {
+  if (std::is_sorted(indices.begin(), indices.end())) return indices;
+  copy.assign(indices.begin(), indices.end());
+  std::sort(copy.begin(), copy.end());
+  return copy;
+}
 
 /// The points of `group` on a surface: runs of at least `min_run` points of one slit on
 /// neighbouring rows (a gap of one row allowed), all on one side of the floor `plane` (A, B, C:

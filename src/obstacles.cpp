@@ -120,15 +120,9 @@ void forEachRun(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& sort
 /// The longest run (forEachRun) among the points of `group`.
 int longestRun(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& group,
                const Eigen::Vector3d* plane) {
-  const pcl::Indices* sorted = &group;
   thread_local pcl::Indices copy;  // only for a group not in ascending order
-  if (!std::is_sorted(group.begin(), group.end())) {
-    copy.assign(group.begin(), group.end());
-    std::sort(copy.begin(), copy.end());
-    sorted = &copy;
-  }
   std::size_t longest = 0;
-  forEachRun(cloud, *sorted, plane,
+  forEachRun(cloud, detail::inAscendingOrder(group, copy), plane,
              [&](std::size_t start, std::size_t end) { longest = std::max(longest, end - start); });
   return static_cast<int>(longest);
 }
