@@ -193,8 +193,8 @@ SlitScaleOff offFloorAtScales(const pcl::PointCloud<PointRDM>& cloud,
   }
   if (!looked) return out;
   // Counted first: the lists are then allocated once, and written only where marked (rarely).
-  // Only candidate cells are marked (the others hold NaN), so the cells are counted in order,
-  // without reading them through the candidates' indices.
+  // Only candidate cells are marked (the others' residuals are NaN), so the cells are counted in
+  // order, without reading them through the candidates' indices.
   const std::uint8_t* off = ws.off.data();
   const float* residuals = r.data();
   std::size_t marked = 0;
