@@ -230,12 +230,15 @@ void Extractor::acrossSlit(const cv::Mat& image, const ProfileParams& params, st
   columns.clear();
   for (std::size_t k = begin; k < end; ++k) {
     const Task& t = tasks_[along_slits_[k]];
+    if (!std::isfinite(centres[along_slits_[k]])) continue;
     across.half_rows = t.across_half_rows;
     columns.plan(t.row, centres[along_slits_[k]], t.slope, across);
   }
   columns.measure<T>(image);
+  std::size_t planned = 0;
   for (std::size_t k = begin; k < end; ++k)
-    columns.centre<T>(image, k - begin, &centres[along_slits_[k]]);
+    if (std::isfinite(centres[along_slits_[k]]))
+      columns.centre<T>(image, planned++, &centres[along_slits_[k]]);
 }
 
 template <typename T>

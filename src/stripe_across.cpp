@@ -175,8 +175,8 @@ bool measuredAcross(double slope, const AcrossStripe& p) {
 
 /// The centre across the stripe from the row's centre `start`: the signal-weighted mean of the
 /// crossings of the columns around it, each carried back to `row` along the stripe, once more
-/// around the new centre where it moved a pixel or more. columns(c, pass, measured, own) points
-/// measured[] at the columns around c (own: room for columns measured for this call).
+/// around the new centre where it moved a pixel or more. columns(c, pass, measured) gives the
+/// columns around c.
 template <typename GetColumns>
 bool across(int row, double start, double slope, const AcrossStripe& p, GetColumns columns,
             double* out) {
@@ -231,7 +231,7 @@ void SlitColumns::plan(int row, double centre, double slope, const AcrossStripe&
   Point& point = points_.back();
   point.row = row, point.half_rows = p.half_rows, point.start = centre, point.slope = slope;
   point.first_use = kNotAcross;
-  if (!std::isfinite(centre) || !measuredAcross(slope, p)) return;
+  if (!measuredAcross(slope, p)) return;
   params_ = p;
   point.first_use = uses_.size();
   long xs[kLanes], first_rows[kLanes];

@@ -65,15 +65,13 @@ struct AcrossColumn {
 class SlitColumns {
  public:
   void clear();
-  /// Plans the point on `row` whose centre on the row is `centre` (NaN: none, nothing to measure),
-  /// of a stripe of direction `slope` (du/dv), with `p`'s window and limits (all but half_rows the
-  /// same along a slit).
+  /// Plans the point on `row` whose centre on the row is `centre`, of a stripe of direction
+  /// `slope` (du/dv), with `p`'s window and limits (all but half_rows the same along a slit).
   void plan(int row, double centre, double slope, const AcrossStripe& p);
   /// Measures every planned column in `image` (CV_8U when T is std::uint8_t, else CV_16U).
   template <typename T>
   void measure(const cv::Mat& image);
-  /// As acrossStripeCentre() for the `point`-th planned point, from the measured columns (false,
-  /// `*out` left alone, for a point without a centre).
+  /// As acrossStripeCentre() for the `point`-th planned point, from the measured columns.
   template <typename T>
   bool centre(const cv::Mat& image, std::size_t point, double* out) const;
 
