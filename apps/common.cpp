@@ -156,12 +156,21 @@ void addExtractorOptions(cli::ArgParser& args) {
   args.flag("along-row",
             "measure the centre along the image row, as the paper does, not across the stripe: "
             "about ten times faster, and pulled by tile edges and grain");
+  const ExtractorConfig defaults;
+  char stray[256];
+  std::snprintf(stray, sizeof stray,
+                "drop runs of up to V points of a slit whose dk jumps by more than %g px from the "
+                "points on both sides: where a stripe is lost on dark grout or a dark object, its "
+                "region's noise; 0: keep them",
+                defaults.stray_step);
+  args.option("stray-run", std::to_string(defaults.stray_run), stray);
 }
 
 ExtractorConfig extractorConfigFromArgs(const cli::ArgParser& args) {
   ExtractorConfig ec;
   ec.estimator = parseEstimator(args.str("estimator"));
   ec.across_stripe = !args.has("along-row");
+  ec.stray_run = static_cast<int>(args.integer("stray-run", 0, 1000));
   return ec;
 }
 

@@ -1,5 +1,6 @@
 #include "multislit/extractor.h"
 
+#include "stray_runs.h"
 #include "stripe_across.h"
 
 #include <algorithm>
@@ -35,6 +36,8 @@ void ExtractorConfig::validate() const {
   require(min_width >= 0 && min_width <= 64, "min_width", "must be in [0, 64] px");
   require(max_saturated >= 0, "max_saturated", "must be >= 0 px");
   require(full_scale >= 0, "full_scale", "must be >= 0 (0: from the image type)");
+  require(stray_run >= 0 && stray_run <= 1000, "stray_run", "must be in [0, 1000] points");
+  require(std::isfinite(stray_step) && stray_step > 0, "stray_step", "must be > 0 px");
 }
 
 Extractor::Extractor(Reference reference, const ExtractorConfig& config)
@@ -210,6 +213,7 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
     std::size_t end = begin + 1;
     while (end < along_slits_.size() && tasks_[along_slits_[end]].cell / width == slit) ++end;
     if (config_.across_stripe) acrossSlit<T>(image, params, begin, end, centres.data());
+    dropStrays(begin, end, centres.data());
     for (std::size_t k = begin; k < end; ++k) {
       const Task& t = tasks_[along_slits_[k]];
       const double centre = centres[along_slits_[k]];
@@ -217,6 +221,20 @@ void Extractor::measureAll(const cv::Mat& image, const ProfileParams& params,
     }
     begin = end;
   }
+}
+
+void Extractor::dropStrays(std::size_t begin, std::size_t end, double* centres) const {
+  if (config_.stray_run == 0) return;
+  thread_local std::vector<detail::SlitSample> samples;
+  samples.resize(end - begin);
+  for (std::size_t k = begin; k < end; ++k) {
+    const Task& t = tasks_[along_slits_[k]];
+    samples[k - begin] = {t.row, centres[along_slits_[k]] - t.u};
+  }
+  if (detail::dropStrayRuns(samples, config_.stray_run, config_.stray_step) == 0) return;
+  for (std::size_t k = begin; k < end; ++k)
+    if (!std::isfinite(samples[k - begin].dk))
+      centres[along_slits_[k]] = std::numeric_limits<double>::quiet_NaN();
 }
 
 template <typename T>

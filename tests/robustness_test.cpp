@@ -34,11 +34,12 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
     EXPECT_EQ(t.reference_error, "") << "variant " << i;  // the reference is built on every one
     if (!t.reference_error.empty()) continue;
     printFrame(i, kind, t);
-    // Over 20 draws of the 40: at least 0.991 of the crossings that clear the paper's contrast
-    // limit measured on every variant, and at least 0.983 of the paper's valid points (variant
-    // 31; 238 of the 800 below the paper's count, the others at or above it).
-    EXPECT_GE(t.measured * 100, t.clear * 98) << "variant " << i;
-    EXPECT_GE(t.valid * 100, t.paper_valid * 97) << "variant " << i;
+    // Over 12 draws of the 40: at least 0.952 of the crossings that clear the paper's contrast
+    // limit measured on every variant, and at least 0.952 of the paper's valid points. The least
+    // are where a stripe is lost and its stray runs are dropped (ExtractorConfig::stray_run):
+    // variant 9 loses 191 points of 4161 to the rule, 14 of them within 1 px of the truth.
+    EXPECT_GE(t.measured * 100, t.clear * 94) << "variant " << i;
+    EXPECT_GE(t.valid * 100, t.paper_valid * 94) << "variant " << i;
     // The points the paper's method gives and ours does not are not measures: of 372 over the
     // 80 frames, 14 lie within 1 px of their crossing (variant 31: 0 of 123). Counted on the
     // truth, ours measures at least as many points as the paper's method on every variant: of
@@ -59,28 +60,28 @@ TEST(Robustness, FortyPhotometriesAgainstGroundTruthAndThePapersMethod) {
   printRow("all", all);
   printSummary("all", all);
   printSummary("sigma <= 0.35 px", quiet);
-  EXPECT_GE(all.measured * 1000, all.clear * 998);     // 0.9995 - 0.9996 over 20 draws
-  EXPECT_GE(all.valid * 1000, all.paper_valid * 995);  // 1.0002 - 1.0007 (pairs)
+  EXPECT_GE(all.measured * 1000, all.clear * 996);     // 0.9973 - 0.9974 over 6 pairs
+  EXPECT_GE(all.valid * 1000, all.paper_valid * 995);  // 0.9977 - 0.9979 (pairs)
   // Points on the truth, ours over the paper's method's: 1.138 - 1.142 over 10 draws of the 40,
   // 1.249 - 1.266 of the first 8.
   EXPECT_GE(all.on_truth * 100, all.paper_on_truth * (kSanitized ? 120 : 112));
   EXPECT_LE(all.false_points * 6, all.paper_false);  // a sixth of the paper's false points or less
-  // The bounds hold for any noise: measured over 10 pairs of realizations (20 single draws; all
-  // 40 variants, and the first 8, as the sanitizers run them) at mean - 3 standard deviations of
+  // The bounds hold for any noise: measured over 6 pairs of realizations (12 single draws; all
+  // 40 variants, and the first 8, as the sanitizers run them) at mean -+ 3 standard deviations of
   // a pair (Release) or of one draw (the sanitizers). One reference image per variant and
-  // realization weighs on every frame, so one draw is no guide. Pairs: recall 0.897 +- 0.010 over
-  // all 40 (0.881 - 0.912), 0.921 +- 0.011 over the quiet frames; the first 8, single draws:
-  // recall 0.836 +- 0.036, quiet 0.954 +- 0.029. The false points, since the slits are judged as
-  // one pattern, over 6 pairs (12 single draws): 1.49 +- 0.035 % of valid (1.44 - 1.54 %), quiet
-  // 1.25 +- 0.013 %; the first 8, single draws: 1.39 +- 0.11 %, quiet 0.06 +- 0.04 % (recall
-  // 0.890 - 0.902 over all 40, 0.831 +- 0.024 of the first 8: as before). Bounds at mean + 3 sd.
-  // Since points in no run join one group at most 2 links from a run (max_hops), 6 pairs: false
-  // points 1.43 +- 0.038 % (1.375 - 1.483 %), quiet 1.19 +- 0.016 %, recall 0.892 +- 0.004,
-  // quiet 0.918 +- 0.010; the sanitizers' bounds were kept.
-  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 86 : 88));
-  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 72 : 86));
-  EXPECT_LE(all.false_points * 10000, all.valid * (kSanitized ? 200 : 155));
-  EXPECT_LE(quiet.false_points * 10000, quiet.valid * (kSanitized ? 30 : 125));
+  // realization weighs on every frame, so one draw is no guide. Pairs: recall 0.849 +- 0.007,
+  // quiet 0.883 +- 0.014; by a point within 2 px of the crossing 0.756 +- 0.009, quiet 0.798 +-
+  // 0.013; false points 1.25 +- 0.04 % of valid, quiet 1.05 +- 0.02 %. The first 8: recall 0.794
+  // +- 0.029, quiet 0.865 +- 0.046; within 2 px 0.743 +- 0.028, quiet 0.774 +- 0.030; false points
+  // 1.04 +- 0.10 %, quiet 0.05 +- 0.03 %. Keeping the stray runs (ExtractorConfig::stray_run 0)
+  // gives recall 0.892 +- 0.004 but within 2 px 0.762 +- 0.011, and 1.43 +- 0.04 % false points:
+  // nearly every crossing they add is found by noise, not by a measure of the object.
+  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 72 : 84));
+  EXPECT_GE(all.found * 100, all.high * (kSanitized ? 70 : 82));
+  EXPECT_GE(quiet.found_on_truth * 100, quiet.high * (kSanitized ? 68 : 75));
+  EXPECT_GE(all.found_on_truth * 100, all.high * (kSanitized ? 66 : 72));
+  EXPECT_LE(all.false_points * 10000, all.valid * (kSanitized ? 140 : 135));
+  EXPECT_LE(quiet.false_points * 10000, quiet.valid * (kSanitized ? 30 : 110));
 }
 
 // The laser off, over random photometries (textured, glossy, speckled, bright floors, 8 and 16
@@ -138,15 +139,16 @@ TEST(Robustness, FortyPhotometriesOnUntexturedFloors) {
   printSummary("untextured, all", all);
   printSummary("untextured, sigma <= 0.7 px", quiet);
   printSummary("untextured, sigma > 0.7 px", noisy);
-  // Over 6 draws of the 40 (10 of the first 8, as the sanitizers run them), frames of sigma
-  // <= 0.7 px: false points away from the objects 0.036 +- 0.009 % of valid (first 8: 0.039 +-
-  // 0.030 %), all false points 0.215 +- 0.008 % (the rest lit within 15 mm of an object); recall
-  // of >= 5 mm crossings 0.924 +- 0.009 (first 8: 0.976 +- 0.009), the paper's method 0.909 +-
-  // 0.008 with 5.5 % false points. All frames: 0.347 +- 0.024 % false points, recall 0.895 +-
-  // 0.010.
+  // Over 12 draws of the 40 (and of the first 8, as the sanitizers run them), frames of sigma
+  // <= 0.7 px: false points away from the objects 0.04 +- 0.01 % of valid (first 8: 0.04 +- 0.03
+  // %), all false points 0.22 +- 0.01 % (the rest lit within 15 mm of an object); recall of >= 5
+  // mm crossings 0.899 +- 0.009 (first 8: 0.931 +- 0.011), by a point within 2 px of the crossing
+  // 0.824 +- 0.006 (first 8: 0.886 +- 0.009). All frames: 0.34 +- 0.03 % false points, recall
+  // 0.852 +- 0.012. Bounds at mean -+ 3 sd.
   EXPECT_LE((quiet.false_points - quiet.false_near) * 10000, quiet.valid * (kSanitized ? 15 : 10));
-  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 95 : 89));
+  EXPECT_GE(quiet.found * 100, quiet.high * (kSanitized ? 89 : 87));
+  EXPECT_GE(quiet.found_on_truth * 100, quiet.high * (kSanitized ? 85 : 80));
   if (!kSanitized) {
-    EXPECT_LE(all.false_points * 10000, all.valid * 42);
+    EXPECT_LE(all.false_points * 10000, all.valid * 44);
   }
 }

@@ -25,15 +25,10 @@ struct Floor {
   std::uint64_t seed = 1;
 };
 
-// Not here: of the random draws 1001-1018 the two on which texture still becomes obstacles in the
-// map, 1001 and 1009 (dark noisy tiles with wide grout nearly along the slits: they turn away from
-// false voxels); docs/walk.md gives their figures.
 std::vector<Floor> floors() {
   std::vector<Floor> all;
   for (const std::string& name : photometryPresetNames()) all.push_back({name, 1});
-  for (const std::uint64_t seed : {1002, 1003, 1004, 1005, 1006, 1007, 1008, 1010, 1011, 1012, 1013,
-                                   1014, 1015, 1016, 1017, 1018})
-    all.push_back({"random", seed});
+  for (std::uint64_t seed = 1001; seed <= 1018; ++seed) all.push_back({"random", seed});
   return all;
 }
 

@@ -31,6 +31,13 @@ struct ExtractorConfig {
   /// row's centre is pulled along the stripe by any change of the floor's brightness there (tile
   /// edges, grout, grain). The row's profile still finds the slit and decides its validity.
   bool across_stripe = true;
+  /// Where a stripe is lost (dark grout, a dark object), the region's brightest blob is noise
+  /// anywhere in it, and neighbouring rows share it: a run of up to this many points of a slit
+  /// that jumps by more than stray_step px of dk from the points on both sides is no surface
+  /// and is not measured (src/stray_runs.h). What it gives: docs/accuracy.md. 0: keep them [points]
+  int stray_run = 3;
+  /// A surface changes dk by at most 3.5 px from one row to the next (ball, box, tennis ball) [px]
+  double stray_step = 6.0;
   /// The image's white [DN]; 0: the reference's (calibrate --full-scale), else 255 for 8-bit
   /// and 65535 for 16-bit images.
   double full_scale = 0.0;
@@ -101,6 +108,9 @@ class Extractor {
   template <typename T>
   void acrossSlit(const cv::Mat& image, const ProfileParams& params, std::size_t begin,
                   std::size_t end, double* centres) const;
+  /// The centres of tasks along_slits_[begin, end) (one slit) without its stray runs
+  /// (ExtractorConfig::stray_run).
+  void dropStrays(std::size_t begin, std::size_t end, double* centres) const;
   /// finish()'s last step through a distorting lens: the centre on task t's recorded row to
   /// the ideal image, the reference there, dk and x, y, z. False where the ideal row lies beyond
   /// the reference slit's ends.
