@@ -25,7 +25,6 @@ struct FrameEvidence {
   static constexpr int kKindBits = 3;
   std::vector<std::uint64_t> marks;
   std::vector<std::uint64_t> sort_buffer;  ///< sortMarks()'s room, kept across frames
-  octomap::KeyRay ray;                     ///< (allocates room for 100 000 keys: made once)
   /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
   struct Slit {
     double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
