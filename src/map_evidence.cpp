@@ -10,6 +10,30 @@
 
 namespace multislit::detail {
 
+namespace {
+
+/// The row and column of RDMap indices, without a division while they stay in one row: the floor
+/// inliers come row by row.
+class RowCursor {
+ public:
+  explicit RowCursor(std::size_t width) : width_(width) {}
+  /// Moves to `index`: row() and column() are its own.
+  void to(std::size_t index) {
+    if (index - start_ >= width_) {  // another row (below start_, the difference wraps)
+      row_ = index / width_;
+      start_ = row_ * width_;
+    }
+    column_ = index - start_;
+  }
+  std::size_t row() const { return row_; }
+  std::size_t column() const { return column_; }
+
+ private:
+  std::size_t width_, row_ = 0, start_ = 0, column_ = 0;
+};
+
+}  // namespace
+
 void FrameEvidence::mark(const octomap::OcTreeKey& key, Kind kind) {
   const std::uint64_t m =
       (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
@@ -50,10 +74,12 @@ void FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud, const F
   const std::size_t rows = cloud.height, width = cloud.width;
   slits.assign(rows, Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
   residual.resize(cloud.size());
+  RowCursor at(width);
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
+    at.to(idx);
+    Slit& slit = slits[at.row()];
+    const auto col = static_cast<std::uint32_t>(at.column());
     const double r = planeResidual(cloud[idx], floor.plane);
     residual[idx] = r;
     slit.sum_sq += r * r;
@@ -74,10 +100,12 @@ void FrameEvidence::flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud,
   const std::size_t rows = cloud.height, width = cloud.width;
   const auto end = static_cast<std::uint32_t>(config.weak_end_margin);
   weak_point.assign(cloud.size(), 0);
+  RowCursor at(width);
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    const Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
+    at.to(idx);
+    const Slit& slit = slits[at.row()];
+    const auto col = static_cast<std::uint32_t>(at.column());
     if (col < slit.first + end || col + end > slit.last) continue;
     weak_point[idx] = residual[idx] >= slit.weak ? 1 : residual[idx] <= -slit.weak ? -1 : 0;
   }
