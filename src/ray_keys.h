@@ -64,14 +64,29 @@ bool RayKeys::walk(const octomap::point3d& origin, const octomap::point3d& end,
     t_max[i] = (border - static_cast<double>(origin(i))) / static_cast<double>(direction(i));
     t_delta[i] = resolution_ / static_cast<double>(std::fabs(direction(i)));
   }
+  // The walk in registers: the axis of the nearest border (ties to the later axis) steps.
+  double tx = t_max[0], ty = t_max[1], tz = t_max[2];
+  octomap::key_type kx = key[0], ky = key[1], kz = key[2];
+  const auto advance = [](octomap::key_type& k, int s, double& t, double delta) {
+    k = static_cast<octomap::key_type>(k + s);
+    t += delta;
+  };
   for (;;) {
-    const unsigned dim =
-        t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
-    key[dim] = static_cast<octomap::key_type>(key[dim] + step[dim]);
-    t_max[dim] += t_delta[dim];
+    if (tx < ty) {
+      if (tx < tz)
+        advance(kx, step[0], tx, t_delta[0]);
+      else
+        advance(kz, step[2], tz, t_delta[2]);
+    } else if (ty < tz) {
+      advance(ky, step[1], ty, t_delta[1]);
+    } else {
+      advance(kz, step[2], tz, t_delta[2]);
+    }
     // The end's voxel, or past the end (rounding may step around the end's voxel).
-    if (key == key_end || std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return true;
-    visit(key);
+    if ((kx == key_end[0] && ky == key_end[1] && kz == key_end[2]) ||
+        std::min(std::min(tx, ty), tz) > length)
+      return true;
+    visit(octomap::OcTreeKey(kx, ky, kz));
   }
 }
 
