@@ -34,17 +34,6 @@ class RowCursor {
 
 }  // namespace
 
-void FrameEvidence::mark(const octomap::OcTreeKey& key, Kind kind) {
-  const std::uint64_t m =
-      (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
-          << kKindBits |
-      kind;
-  // The points of a slit come in order, several per voxel: a repeat of the last mark adds
-  // nothing (except for weak points, which are counted), and leaves less to sort.
-  if (kind != kWeak && !marks.empty() && marks.back() == m) return;
-  marks.push_back(m);
-}
-
 octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
   const std::uint64_t k = mark >> kKindBits;
   return octomap::OcTreeKey(static_cast<octomap::key_type>(k),

@@ -40,7 +40,16 @@ struct FrameEvidence {
   std::vector<SweepPoint> sweep_points;
   std::vector<octomap::OcTreeKey> sweep_keys;
 
-  void mark(const octomap::OcTreeKey& key, Kind kind);
+  void mark(const octomap::OcTreeKey& key, Kind kind) {
+    const std::uint64_t m =
+        (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
+            << kKindBits |
+        kind;
+    // The points of a slit come in order, several per voxel: a repeat of the last mark adds
+    // nothing (except for weak points, which are counted), and leaves less to sort.
+    if (kind != kWeak && !marks.empty() && marks.back() == m) return;
+    marks.push_back(m);
+  }
   static octomap::OcTreeKey keyOf(std::uint64_t mark);
   /// `marks` in ascending order (what std::sort gives), by a radix sort over the bytes in which
   /// they differ: a frame's voxels lie near each other, so most bytes of their keys are the same.
