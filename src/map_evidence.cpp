@@ -43,17 +43,18 @@ octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
 
 void FrameEvidence::sortMarks() {
   if (marks.empty()) return;
-  constexpr int kBytes = 8;
   std::uint64_t differ = 0;  // the bits in which some mark differs from the first
   for (const std::uint64_t m : marks) differ |= m ^ marks.front();
   sort_buffer.resize(marks.size());
-  for (int byte = 0; byte < kBytes; ++byte) {  // least significant first: each pass is stable
-    const int shift = 8 * byte;
-    if (((differ >> shift) & 0xffu) == 0) continue;
-    std::size_t start[257] = {};
-    for (const std::uint64_t m : marks) ++start[((m >> shift) & 0xffu) + 1];
-    for (int d = 0; d < 256; ++d) start[d + 1] += start[d];
-    for (const std::uint64_t m : marks) sort_buffer[start[(m >> shift) & 0xffu]++] = m;
+  constexpr int kDigitBits = 11;  // 2048 counters: in the first level cache
+  constexpr std::uint64_t kDigit = (1u << kDigitBits) - 1;
+  while (differ != 0) {  // a digit from the lowest bit still differing: each pass is stable
+    const int shift = __builtin_ctzll(differ);
+    differ &= ~(kDigit << shift);
+    std::uint32_t start[kDigit + 2] = {};
+    for (const std::uint64_t m : marks) ++start[((m >> shift) & kDigit) + 1];
+    for (std::uint64_t d = 0; d <= kDigit; ++d) start[d + 1] += start[d];
+    for (const std::uint64_t m : marks) sort_buffer[start[(m >> shift) & kDigit]++] = m;
     marks.swap(sort_buffer);
   }
 }

@@ -51,8 +51,9 @@ struct FrameEvidence {
     marks.push_back(m);
   }
   static octomap::OcTreeKey keyOf(std::uint64_t mark);
-  /// `marks` in ascending order (what std::sort gives), by a radix sort over the bytes in which
-  /// they differ: a frame's voxels lie near each other, so most bytes of their keys are the same.
+  /// `marks` in ascending order (what std::sort gives), by a radix sort over digits of 11 bits
+  /// placed where they differ: a frame's voxels lie near each other, so most bits of their keys
+  /// are the same.
   void sortMarks();
 
   /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
