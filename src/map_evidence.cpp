@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace multislit::detail {
@@ -188,6 +189,36 @@ bool fitAffine(const std::vector<float>& moves, const std::vector<Eigen::Vector2
 
 }  // namespace
 
+float upperMedian(std::vector<float>& values, std::vector<std::uint32_t>& bits) {
+  const std::size_t half = values.size() / 2;
+  bits.resize(values.size());
+  std::uint32_t any = 0;
+  for (std::size_t j = 0; j < values.size(); ++j) {
+    std::memcpy(&bits[j], &values[j], sizeof(float));
+    any |= bits[j] > 0x7f800000u ? 1u : 0u;  // the sign bit, or a NaN
+  }
+  if (values.empty() || any != 0) {
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(half);
+    std::nth_element(values.begin(), mid, values.end());
+    return values.empty() ? 0.0f : *mid;
+  }
+  std::size_t rank = half;  // of the value sought among those left
+  for (const int shift : {21, 10, 0}) {
+    constexpr std::uint32_t kDigit = (1u << 11) - 1;
+    std::uint32_t count[kDigit + 1] = {};
+    for (const std::uint32_t b : bits) ++count[(b >> shift) & kDigit];
+    std::uint32_t digit = 0;
+    for (; rank >= count[digit]; ++digit) rank -= count[digit];
+    // Keep the values with that digit (the digits above are alike in all left).
+    bits.erase(std::remove_if(bits.begin(), bits.end(),
+                              [&](std::uint32_t b) { return ((b >> shift) & kDigit) != digit; }),
+               bits.end());
+  }
+  float median;
+  std::memcpy(&median, &bits.front(), sizeof(float));
+  return median;
+}
+
 SweepStep SlitSweep::finish(double dead_zone) {
   moves_.clear();
   moved_at_.clear();
@@ -198,19 +229,21 @@ SweepStep SlitSweep::finish(double dead_zone) {
   const bool has_across = across.norm() > 1e-3;
   if (has_across) across.normalize();
   const Eigen::Vector2f n = across.cast<float>();
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double sum_x = 0.0, sum_y = 0.0;  // of the points that moved: in registers
   for (std::size_t j = 0; j < now_.size(); ++j) {
     Seen& s = seen_[now_[j]];
     if (has_across && s.frame + 1 == frame_) {
       moves_.push_back((now_xy_[j] - Eigen::Vector2f(s.x, s.y)).dot(n));
       moved_at_.push_back(now_xy_[j]);
-      centre += now_xy_[j].cast<double>();
+      sum_x += static_cast<double>(now_xy_[j].x());
+      sum_y += static_cast<double>(now_xy_[j].y());
     }
     s = Seen{now_xy_[j].x(), now_xy_[j].y(), frame_};
   }
   SweepStep step;
   if (moves_.size() < 20) return step;
-  centre /= static_cast<double>(moves_.size());
+  const auto count = static_cast<double>(moves_.size());
+  const Eigen::Vector2d centre(sum_x / count, sum_y / count);
   // Fit all, then again without the points far off the first fit (a point that jumped to another
   // place on its slit: an edge of the view, an object).
   Eigen::Vector3d fit = Eigen::Vector3d::Zero();
@@ -222,10 +255,9 @@ SweepStep SlitSweep::finish(double dead_zone) {
   residuals_.clear();
   for (std::size_t j = 0; j < moves_.size(); ++j)
     residuals_.push_back(std::abs(moves_[j] - static_cast<float>(fitted(moved_at_[j]))));
-  const auto mid = residuals_.begin() + static_cast<std::ptrdiff_t>(residuals_.size() / 2);
-  std::nth_element(residuals_.begin(), mid, residuals_.end());
+  const float median = upperMedian(residuals_, residual_bits_);
   constexpr double kMinKeep = 2e-4;  // [m]: below the points' own noise, nothing is an outlier
-  const double keep = std::max(kMinKeep, 3.0 * 1.4826 * static_cast<double>(*mid));
+  const double keep = std::max(kMinKeep, 3.0 * 1.4826 * static_cast<double>(median));
   if (!fitAffine(moves_, moved_at_, centre, fit, keep, fit)) return step;
   // The largest move in the view: below the dead zone, the slits did not move.
   double largest = 0.0;

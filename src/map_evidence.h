@@ -68,6 +68,12 @@ struct FrameEvidence {
                            const OccupancyMapConfig& config);
 };
 
+/// The value std::nth_element would place at values.size() / 2 (0 when empty), by a radix select
+/// over the bits of the values (three digits from the top): for floats >= 0 the order of the bits
+/// is the order of the values. nth_element itself when any is negative or NaN. May reorder
+/// `values`; `bits` is room kept by the caller.
+float upperMedian(std::vector<float>& values, std::vector<std::uint32_t>& bits);
+
 /// How far the slits moved across themselves on the floor since the previous frame, at each place:
 /// the moves of the points seen in both frames along the direction from the first slit to the
 /// last, fitted by an affine function of the place (a rigid move of the robot over the floor
@@ -97,8 +103,9 @@ class SlitSweep {
   std::vector<std::uint32_t> now_;  ///< indices seen this frame
   std::vector<Eigen::Vector2f> now_xy_;
   std::vector<float> moves_;
-  std::vector<Eigen::Vector2f> moved_at_;  ///< where each of moves_ was measured
-  std::vector<float> residuals_;           ///< of moves_ from the first fit
+  std::vector<Eigen::Vector2f> moved_at_;     ///< where each of moves_ was measured
+  std::vector<float> residuals_;              ///< of moves_ from the first fit
+  std::vector<std::uint32_t> residual_bits_;  ///< room for their median
 };
 
 }  // namespace multislit::detail
