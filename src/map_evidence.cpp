@@ -35,13 +35,6 @@ class RowCursor {
 
 }  // namespace
 
-octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
-  const std::uint64_t k = mark >> kKindBits;
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(k),
-                            static_cast<octomap::key_type>(k >> 16),
-                            static_cast<octomap::key_type>(k >> 32));
-}
-
 void FrameEvidence::sortMarks() {
   if (marks.empty()) return;
   std::uint64_t differ = 0;  // the bits in which some mark differs from the first

@@ -7,6 +7,7 @@
 #include "multislit/occupancy_map.h"
 #include "multislit/point_types.h"
 #include "multislit/sweep_evidence.h"
+#include "voxel_code.h"
 
 #include <octomap/OcTree.h>
 #include <pcl/point_cloud.h>
@@ -19,7 +20,8 @@
 
 namespace multislit::detail {
 
-/// Marks as (packed key << 3 | kind), so that sorting gathers the marks of each voxel.
+/// Marks as (VoxelCode::of(key) << 3 | kind): sorting gathers the marks of each voxel and puts the
+/// voxels in the tree's depth-first order, in which KeyOrderUpdate descends least.
 struct FrameEvidence {
   enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kPending = 2, kWeak = 3, kHit = 4 };
   static constexpr int kKindBits = 3;
@@ -41,16 +43,12 @@ struct FrameEvidence {
   std::vector<octomap::OcTreeKey> sweep_keys;
 
   void mark(const octomap::OcTreeKey& key, Kind kind) {
-    const std::uint64_t m =
-        (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
-            << kKindBits |
-        kind;
+    const std::uint64_t m = VoxelCode::of(key) << kKindBits | kind;
     // The points of a slit come in order, several per voxel: a repeat of the last mark adds
     // nothing (except for weak points, which are counted), and leaves less to sort.
     if (kind != kWeak && !marks.empty() && marks.back() == m) return;
     marks.push_back(m);
   }
-  static octomap::OcTreeKey keyOf(std::uint64_t mark);
   /// `marks` in ascending order (what std::sort gives), by a radix sort over digits of 11 bits
   /// placed where they differ: a frame's voxels lie near each other, so most bits of their keys
   /// are the same.

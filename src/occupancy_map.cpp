@@ -228,13 +228,13 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
   MapUpdateStats stats;
   stats.inserted = true;
   e.sortMarks();
-  detail::KeyOrderUpdate leaves(*tree_);  // the voxels come in key order
+  detail::KeyOrderUpdate leaves(*tree_);  // the voxels come in the order of their codes
   for (std::size_t i = 0; i < e.marks.size();) {
     // The marks of one voxel: a hit wins, then enough weak points; a miss only without weak
     // points (an object split between voxels lifts a few points in each).
     constexpr int kBits = FrameEvidence::kKindBits;
     constexpr std::uint64_t kKind = (1u << kBits) - 1;
-    const std::uint64_t voxel = e.marks[i] >> kBits;
+    const std::uint64_t voxel = e.marks[i] >> kBits;  // its VoxelCode
     int weak = 0;
     bool hit = false, pending = false;
     for (; i < e.marks.size() && e.marks[i] >> kBits == voxel; ++i) {
@@ -243,15 +243,14 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
       hit = hit || kind == FrameEvidence::kHit;
       pending = pending || kind == FrameEvidence::kPending;
     }
-    const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << kBits);
     if (hit) {
-      leaves.update(key, log_hit_);
+      leaves.update(voxel, log_hit_);
       ++stats.hit_voxels;
     } else if (weak >= config_.min_weak_points) {
-      leaves.update(key, log_weak_);
+      leaves.update(voxel, log_weak_);
       ++stats.weak_voxels;
     } else if (weak == 0 && !pending) {
-      leaves.update(key, log_miss_);
+      leaves.update(voxel, log_miss_);
       ++stats.free_voxels;
     } else {  // evidence not consistent over the sweep, or too few weak points: unknown
       ++stats.pending_voxels;
