@@ -6,41 +6,49 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace multislit::detail {
 
-void FrameEvidence::mark(const octomap::OcTreeKey& key, Kind kind) {
-  const std::uint64_t m =
-      (std::uint64_t{key[0]} | std::uint64_t{key[1]} << 16 | std::uint64_t{key[2]} << 32)
-          << kKindBits |
-      kind;
-  // The points of a slit come in order, several per voxel: a repeat of the last mark adds
-  // nothing (except for weak points, which are counted), and leaves less to sort.
-  if (kind != kWeak && !marks.empty() && marks.back() == m) return;
-  marks.push_back(m);
-}
+namespace {
 
-octomap::OcTreeKey FrameEvidence::keyOf(std::uint64_t mark) {
-  const std::uint64_t k = mark >> kKindBits;
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(k),
-                            static_cast<octomap::key_type>(k >> 16),
-                            static_cast<octomap::key_type>(k >> 32));
-}
+/// The row and column of RDMap indices, without a division while they stay in one row: the floor
+/// inliers come row by row.
+class RowCursor {
+ public:
+  explicit RowCursor(std::size_t width) : width_(width) {}
+  /// Moves to `index`: row() and column() are its own.
+  void to(std::size_t index) {
+    if (index - start_ >= width_) {  // another row (below start_, the difference wraps)
+      row_ = index / width_;
+      start_ = row_ * width_;
+    }
+    column_ = index - start_;
+  }
+  std::size_t row() const { return row_; }
+  std::size_t column() const { return column_; }
+
+ private:
+  std::size_t width_, row_ = 0, start_ = 0, column_ = 0;
+};
+
+}  // namespace
 
 void FrameEvidence::sortMarks() {
   if (marks.empty()) return;
-  constexpr int kBytes = 8;
   std::uint64_t differ = 0;  // the bits in which some mark differs from the first
   for (const std::uint64_t m : marks) differ |= m ^ marks.front();
   sort_buffer.resize(marks.size());
-  for (int byte = 0; byte < kBytes; ++byte) {  // least significant first: each pass is stable
-    const int shift = 8 * byte;
-    if (((differ >> shift) & 0xffu) == 0) continue;
-    std::size_t start[257] = {};
-    for (const std::uint64_t m : marks) ++start[((m >> shift) & 0xffu) + 1];
-    for (int d = 0; d < 256; ++d) start[d + 1] += start[d];
-    for (const std::uint64_t m : marks) sort_buffer[start[(m >> shift) & 0xffu]++] = m;
+  constexpr int kDigitBits = 11;  // 2048 counters: in the first level cache
+  constexpr std::uint64_t kDigit = (1u << kDigitBits) - 1;
+  while (differ != 0) {  // a digit from the lowest bit still differing: each pass is stable
+    const int shift = __builtin_ctzll(differ);
+    differ &= ~(kDigit << shift);
+    std::uint32_t start[kDigit + 2] = {};
+    for (const std::uint64_t m : marks) ++start[((m >> shift) & kDigit) + 1];
+    for (std::uint64_t d = 0; d <= kDigit; ++d) start[d + 1] += start[d];
+    for (const std::uint64_t m : marks) sort_buffer[start[(m >> shift) & kDigit]++] = m;
     marks.swap(sort_buffer);
   }
 }
@@ -50,10 +58,12 @@ void FrameEvidence::measureSlits(const pcl::PointCloud<PointRDM>& cloud, const F
   const std::size_t rows = cloud.height, width = cloud.width;
   slits.assign(rows, Slit{0.0, 0, static_cast<std::uint32_t>(width), 0, 0.0});
   residual.resize(cloud.size());
+  RowCursor at(width);
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
+    at.to(idx);
+    Slit& slit = slits[at.row()];
+    const auto col = static_cast<std::uint32_t>(at.column());
     const double r = planeResidual(cloud[idx], floor.plane);
     residual[idx] = r;
     slit.sum_sq += r * r;
@@ -74,10 +84,12 @@ void FrameEvidence::flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud,
   const std::size_t rows = cloud.height, width = cloud.width;
   const auto end = static_cast<std::uint32_t>(config.weak_end_margin);
   weak_point.assign(cloud.size(), 0);
+  RowCursor at(width);
   for (const auto i : floor.inliers) {
     const auto idx = static_cast<std::size_t>(i);
-    const Slit& slit = slits[idx / width];
-    const auto col = static_cast<std::uint32_t>(idx % width);
+    at.to(idx);
+    const Slit& slit = slits[at.row()];
+    const auto col = static_cast<std::uint32_t>(at.column());
     if (col < slit.first + end || col + end > slit.last) continue;
     weak_point[idx] = residual[idx] >= slit.weak ? 1 : residual[idx] <= -slit.weak ? -1 : 0;
   }
@@ -170,6 +182,36 @@ bool fitAffine(const std::vector<float>& moves, const std::vector<Eigen::Vector2
 
 }  // namespace
 
+float upperMedian(std::vector<float>& values, std::vector<std::uint32_t>& bits) {
+  const std::size_t half = values.size() / 2;
+  bits.resize(values.size());
+  std::uint32_t any = 0;
+  for (std::size_t j = 0; j < values.size(); ++j) {
+    std::memcpy(&bits[j], &values[j], sizeof(float));
+    any |= bits[j] > 0x7f800000u ? 1u : 0u;  // the sign bit, or a NaN
+  }
+  if (values.empty() || any != 0) {
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(half);
+    std::nth_element(values.begin(), mid, values.end());
+    return values.empty() ? 0.0f : *mid;
+  }
+  std::size_t rank = half;  // of the value sought among those left
+  for (const int shift : {21, 10, 0}) {
+    constexpr std::uint32_t kDigit = (1u << 11) - 1;
+    std::uint32_t count[kDigit + 1] = {};
+    for (const std::uint32_t b : bits) ++count[(b >> shift) & kDigit];
+    std::uint32_t digit = 0;
+    for (; rank >= count[digit]; ++digit) rank -= count[digit];
+    // Keep the values with that digit (the digits above are alike in all left).
+    bits.erase(std::remove_if(bits.begin(), bits.end(),
+                              [&](std::uint32_t b) { return ((b >> shift) & kDigit) != digit; }),
+               bits.end());
+  }
+  float median;
+  std::memcpy(&median, &bits.front(), sizeof(float));
+  return median;
+}
+
 SweepStep SlitSweep::finish(double dead_zone) {
   moves_.clear();
   moved_at_.clear();
@@ -180,19 +222,21 @@ SweepStep SlitSweep::finish(double dead_zone) {
   const bool has_across = across.norm() > 1e-3;
   if (has_across) across.normalize();
   const Eigen::Vector2f n = across.cast<float>();
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double sum_x = 0.0, sum_y = 0.0;  // of the points that moved: in registers
   for (std::size_t j = 0; j < now_.size(); ++j) {
     Seen& s = seen_[now_[j]];
     if (has_across && s.frame + 1 == frame_) {
       moves_.push_back((now_xy_[j] - Eigen::Vector2f(s.x, s.y)).dot(n));
       moved_at_.push_back(now_xy_[j]);
-      centre += now_xy_[j].cast<double>();
+      sum_x += static_cast<double>(now_xy_[j].x());
+      sum_y += static_cast<double>(now_xy_[j].y());
     }
     s = Seen{now_xy_[j].x(), now_xy_[j].y(), frame_};
   }
   SweepStep step;
   if (moves_.size() < 20) return step;
-  centre /= static_cast<double>(moves_.size());
+  const auto count = static_cast<double>(moves_.size());
+  const Eigen::Vector2d centre(sum_x / count, sum_y / count);
   // Fit all, then again without the points far off the first fit (a point that jumped to another
   // place on its slit: an edge of the view, an object).
   Eigen::Vector3d fit = Eigen::Vector3d::Zero();
@@ -204,10 +248,9 @@ SweepStep SlitSweep::finish(double dead_zone) {
   residuals_.clear();
   for (std::size_t j = 0; j < moves_.size(); ++j)
     residuals_.push_back(std::abs(moves_[j] - static_cast<float>(fitted(moved_at_[j]))));
-  const auto mid = residuals_.begin() + static_cast<std::ptrdiff_t>(residuals_.size() / 2);
-  std::nth_element(residuals_.begin(), mid, residuals_.end());
+  const float median = upperMedian(residuals_, residual_bits_);
   constexpr double kMinKeep = 2e-4;  // [m]: below the points' own noise, nothing is an outlier
-  const double keep = std::max(kMinKeep, 3.0 * 1.4826 * static_cast<double>(*mid));
+  const double keep = std::max(kMinKeep, 3.0 * 1.4826 * static_cast<double>(median));
   if (!fitAffine(moves_, moved_at_, centre, fit, keep, fit)) return step;
   // The largest move in the view: below the dead zone, the slits did not move.
   double largest = 0.0;

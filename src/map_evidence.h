@@ -7,6 +7,7 @@
 #include "multislit/occupancy_map.h"
 #include "multislit/point_types.h"
 #include "multislit/sweep_evidence.h"
+#include "voxel_code.h"
 
 #include <octomap/OcTree.h>
 #include <pcl/point_cloud.h>
@@ -19,13 +20,13 @@
 
 namespace multislit::detail {
 
-/// Marks as (packed key << 3 | kind), so that sorting gathers the marks of each voxel.
+/// Marks as (VoxelCode::of(key) << 3 | kind): sorting gathers the marks of each voxel and puts the
+/// voxels in the tree's depth-first order, in which KeyOrderUpdate descends least.
 struct FrameEvidence {
   enum Kind : std::uint64_t { kRay = 0, kFloor = 1, kPending = 2, kWeak = 3, kHit = 4 };
   static constexpr int kKindBits = 3;
   std::vector<std::uint64_t> marks;
   std::vector<std::uint64_t> sort_buffer;  ///< sortMarks()'s room, kept across frames
-  octomap::KeyRay ray;                     ///< (allocates room for 100 000 keys: made once)
   /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
   struct Slit {
     double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
@@ -41,10 +42,16 @@ struct FrameEvidence {
   std::vector<SweepPoint> sweep_points;
   std::vector<octomap::OcTreeKey> sweep_keys;
 
-  void mark(const octomap::OcTreeKey& key, Kind kind);
-  static octomap::OcTreeKey keyOf(std::uint64_t mark);
-  /// `marks` in ascending order (what std::sort gives), by a radix sort over the bytes in which
-  /// they differ: a frame's voxels lie near each other, so most bytes of their keys are the same.
+  void mark(const octomap::OcTreeKey& key, Kind kind) {
+    const std::uint64_t m = VoxelCode::of(key) << kKindBits | kind;
+    // The points of a slit come in order, several per voxel: a repeat of the last mark adds
+    // nothing (except for weak points, which are counted), and leaves less to sort.
+    if (kind != kWeak && !marks.empty() && marks.back() == m) return;
+    marks.push_back(m);
+  }
+  /// `marks` in ascending order (what std::sort gives), by a radix sort over digits of 11 bits
+  /// placed where they differ: a frame's voxels lie near each other, so most bits of their keys
+  /// are the same.
   void sortMarks();
 
   /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
@@ -58,6 +65,12 @@ struct FrameEvidence {
   void flagWeakFloorPoints(const pcl::PointCloud<PointRDM>& cloud, const FloorResult& floor,
                            const OccupancyMapConfig& config);
 };
+
+/// The value std::nth_element would place at values.size() / 2 (0 when empty), by a radix select
+/// over the bits of the values (three digits from the top): for floats >= 0 the order of the bits
+/// is the order of the values. nth_element itself when any is negative or NaN. May reorder
+/// `values`; `bits` is room kept by the caller.
+float upperMedian(std::vector<float>& values, std::vector<std::uint32_t>& bits);
 
 /// How far the slits moved across themselves on the floor since the previous frame, at each place:
 /// the moves of the points seen in both frames along the direction from the first slit to the
@@ -88,8 +101,9 @@ class SlitSweep {
   std::vector<std::uint32_t> now_;  ///< indices seen this frame
   std::vector<Eigen::Vector2f> now_xy_;
   std::vector<float> moves_;
-  std::vector<Eigen::Vector2f> moved_at_;  ///< where each of moves_ was measured
-  std::vector<float> residuals_;           ///< of moves_ from the first fit
+  std::vector<Eigen::Vector2f> moved_at_;     ///< where each of moves_ was measured
+  std::vector<float> residuals_;              ///< of moves_ from the first fit
+  std::vector<std::uint32_t> residual_bits_;  ///< room for their median
 };
 
 }  // namespace multislit::detail

@@ -4,6 +4,7 @@
 #include "config_check.h"
 #include "key_order_update.h"
 #include "map_evidence.h"
+#include "ray_keys.h"
 
 #include <octomap/octomap_utils.h>
 
@@ -168,6 +169,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
   // Floor points: weak evidence, or floor marks and the free cells of the light ray that reached
   // them; and how far the slits moved across the floor since the last frame.
   const Eigen::Vector3d light = map.toMap(light_origin_camera);
+  const detail::RayKeys rays(*tree_);
   octomap::OcTreeKey last_ray;  // floor voxel of the last ray: the points of a slit come in order
   int last_slit = -1;
   slit_sweep_->begin(cloud.size());
@@ -185,7 +187,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
     const octomap::OcTreeKey key = map.keyOf(m);
     e.mark(key, FrameEvidence::kFloor);
     if (key == last_ray && p.slit == last_slit) continue;
-    addFreeRay(m, light, key, e);  // one ray per slit and floor voxel
+    addFreeRay(m, light, key, rays, e);  // one ray per slit and floor voxel
     last_ray = key;
     last_slit = p.slit;
   }
@@ -209,29 +211,30 @@ void OccupancyMap::markEvidence(FrameEvidence& e) {
 }
 
 void OccupancyMap::addFreeRay(const Eigen::Vector3d& floor_point, const Eigen::Vector3d& light,
-                              const octomap::OcTreeKey& floor_key, FrameEvidence& e) const {
+                              const octomap::OcTreeKey& floor_key, const detail::RayKeys& rays,
+                              FrameEvidence& e) const {
   const Eigen::Vector3d to_light = light - floor_point;
   if (to_light.z() <= config_.free_height) return;
   // The light came down to the floor point: the cells it crossed below free_height are free.
   const double res = config_.resolution;
   const Eigen::Vector3d top = floor_point + to_light * (config_.free_height / to_light.z());
   const Eigen::Vector3d low = floor_point + to_light * (0.5 * res / to_light.z());
-  if (!tree_->computeRayKeys(toOcto(top), toOcto(low), e.ray)) return;
-  for (const octomap::OcTreeKey& key : e.ray)
+  rays.walk(toOcto(top), toOcto(low), [&](const octomap::OcTreeKey& key) {
     if (key[2] != floor_key[2]) e.mark(key, FrameEvidence::kRay);  // floor voxels: own points
+  });
 }
 
 MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
   MapUpdateStats stats;
   stats.inserted = true;
   e.sortMarks();
-  detail::KeyOrderUpdate leaves(*tree_);  // the voxels come in key order
+  detail::KeyOrderUpdate leaves(*tree_);  // the voxels come in the order of their codes
   for (std::size_t i = 0; i < e.marks.size();) {
     // The marks of one voxel: a hit wins, then enough weak points; a miss only without weak
     // points (an object split between voxels lifts a few points in each).
     constexpr int kBits = FrameEvidence::kKindBits;
     constexpr std::uint64_t kKind = (1u << kBits) - 1;
-    const std::uint64_t voxel = e.marks[i] >> kBits;
+    const std::uint64_t voxel = e.marks[i] >> kBits;  // its VoxelCode
     int weak = 0;
     bool hit = false, pending = false;
     for (; i < e.marks.size() && e.marks[i] >> kBits == voxel; ++i) {
@@ -240,15 +243,14 @@ MapUpdateStats OccupancyMap::apply(FrameEvidence& e) {
       hit = hit || kind == FrameEvidence::kHit;
       pending = pending || kind == FrameEvidence::kPending;
     }
-    const octomap::OcTreeKey key = FrameEvidence::keyOf(voxel << kBits);
     if (hit) {
-      leaves.update(key, log_hit_);
+      leaves.update(voxel, log_hit_);
       ++stats.hit_voxels;
     } else if (weak >= config_.min_weak_points) {
-      leaves.update(key, log_weak_);
+      leaves.update(voxel, log_weak_);
       ++stats.weak_voxels;
     } else if (weak == 0 && !pending) {
-      leaves.update(key, log_miss_);
+      leaves.update(voxel, log_miss_);
       ++stats.free_voxels;
     } else {  // evidence not consistent over the sweep, or too few weak points: unknown
       ++stats.pending_voxels;

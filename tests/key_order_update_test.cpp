@@ -1,7 +1,9 @@
-// The map's leaf updates in key order (src/key_order_update.h) against OctoMap's own
-// updateNode(key, log_odds, lazy_eval = true): the same tree, node for node and byte for byte,
-// through new voxels, voxels at the clamping bounds and pruned nodes that must be expanded.
+// The map's leaf updates one voxel after another (src/key_order_update.h), and the voxels' codes
+// that order them (src/voxel_code.h), against OctoMap's own updateNode(key, log_odds, lazy_eval =
+// true): the same tree, node for node and byte for byte, through new voxels, voxels at the clamping
+// bounds and pruned nodes that must be expanded.
 #include "key_order_update.h"
+#include "voxel_code.h"
 
 #include <octomap/OcTree.h>
 
@@ -19,6 +21,7 @@
 namespace {
 
 using multislit::detail::KeyOrderUpdate;
+using multislit::detail::VoxelCode;
 
 std::unique_ptr<octomap::OcTree> makeTree() {
   auto tree = std::make_unique<octomap::OcTree>(0.01);
@@ -87,7 +90,9 @@ std::vector<Update> frameOf(std::mt19937& rng, int frame) {
   return updates;
 }
 
-TEST(KeyOrderUpdate, GivesOctoMapsTreeThroughBoundsAndPrunedNodes) {
+/// The frames of updates through KeyOrderUpdate and through updateNode(); `by_code`: each frame's
+/// voxels in the order of their codes (the map's order), else in the order of (z, y, x).
+void checkAgainstUpdateNode(bool by_code) {
   auto ours = makeTree(), stock = makeTree();
   std::mt19937 rng(7);
   std::size_t at_bound = 0, pruned = 0, expanded = 0;
@@ -100,8 +105,14 @@ TEST(KeyOrderUpdate, GivesOctoMapsTreeThroughBoundsAndPrunedNodes) {
     }
     const std::size_t pruned_before = prunedLeaves(*ours);
     KeyOrderUpdate update(*ours);
-    for (const Update& u : frameOf(rng, frame)) {
-      const octomap::OcTreeNode* a = update.update(u.key, u.log_odds);
+    std::vector<Update> updates = frameOf(rng, frame);
+    if (by_code)
+      std::sort(updates.begin(), updates.end(), [](const Update& a, const Update& b) {
+        return VoxelCode::of(a.key) < VoxelCode::of(b.key);
+      });
+    for (const Update& u : updates) {
+      const octomap::OcTreeNode* a = by_code ? update.update(VoxelCode::of(u.key), u.log_odds)
+                                             : update.update(u.key, u.log_odds);
       const octomap::OcTreeNode* b = stock->updateNode(u.key, u.log_odds, true);
       ASSERT_TRUE(a != nullptr && b != nullptr);
       ASSERT_EQ(a->getLogOdds(), b->getLogOdds()) << "frame " << frame;
@@ -117,6 +128,29 @@ TEST(KeyOrderUpdate, GivesOctoMapsTreeThroughBoundsAndPrunedNodes) {
   EXPECT_GT(at_bound, 10000u);
   EXPECT_GT(pruned, 20u);
   EXPECT_GE(expanded, 5u);
+}
+
+TEST(KeyOrderUpdate, GivesOctoMapsTreeThroughBoundsAndPrunedNodes) {
+  checkAgainstUpdateNode(false);
+}
+
+TEST(KeyOrderUpdate, GivesOctoMapsTreeInTheOrderOfVoxelCodes) { checkAgainstUpdateNode(true); }
+
+TEST(VoxelCode, HoldsTheChildOfEachLevelAndGivesTheKeyBack) {
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> any(0, 65535);
+  for (int i = 0; i < 100000; ++i) {
+    const octomap::OcTreeKey key(static_cast<octomap::key_type>(any(rng)),
+                                 static_cast<octomap::key_type>(any(rng)),
+                                 static_cast<octomap::key_type>(any(rng)));
+    const std::uint64_t code = VoxelCode::of(key);
+    ASSERT_EQ(VoxelCode::key(code), key);
+    ASSERT_LT(code, std::uint64_t{1} << 48);
+    for (int level = 0; level < 16; ++level)
+      ASSERT_EQ(code >> (3 * level) & 7u, octomap::computeChildIdx(key, level)) << level;
+  }
+  EXPECT_EQ(VoxelCode::of(octomap::OcTreeKey(1, 2, 4)), 1u | 2u << 3 | 4u << 6);
+  EXPECT_EQ(VoxelCode::of(octomap::OcTreeKey(0xffff, 0, 0)), 0x249249249249u);
 }
 
 }  // namespace

@@ -25,6 +25,7 @@ namespace multislit {
 
 namespace detail {
 struct FrameEvidence;
+class RayKeys;
 class SlitSweep;
 }  // namespace detail
 
@@ -141,7 +142,8 @@ class OccupancyMap {
                const Eigen::Vector3d& light_origin_camera, FrameEvidence& evidence);
   void markEvidence(FrameEvidence& evidence);
   void addFreeRay(const Eigen::Vector3d& floor_point, const Eigen::Vector3d& light,
-                  const octomap::OcTreeKey& floor_key, FrameEvidence& evidence) const;
+                  const octomap::OcTreeKey& floor_key, const detail::RayKeys& rays,
+                  FrameEvidence& evidence) const;
   MapUpdateStats apply(FrameEvidence& evidence);
 
   OccupancyMapConfig config_;
