@@ -3,7 +3,9 @@
 
 #include "config_check.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -88,10 +90,13 @@ std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, cons
   const auto points = static_cast<std::size_t>(config_.sudden_min_points);
   // Lines below the floor, this frame and the last: a dark line on the floor along the slits
   // pulls the stripes beside it below the floor and above it, on neighbouring slits and in
-  // neighbouring frames; an object on the floor lifts its slits only.
+  // neighbouring frames; an object on the floor lifts its slits only. A line is a group's surface
+  // points below the floor, wherever the group's highest point lies: its two lobes may join one.
   std::vector<Box> lines;
   for (const Obstacle& b : obstacles.obstacles)
-    if (b.height < 0 && b.surface.size() >= points) lines.push_back(worldBox(b, body));
+    if (std::count_if(b.surface_heights.begin(), b.surface_heights.end(),
+                      [](float h) { return h < 0; }) >= static_cast<std::ptrdiff_t>(points))
+      lines.push_back(worldBox(b, body));
   const auto besideLine = [&](const Box& box) {
     for (const std::vector<Box>* frame : {&lines, &lines_before_})
       for (const Box& line : *frame)

@@ -269,6 +269,19 @@ TEST(Walker, StopsForASuddenObstacleThenWalks) {
   seen.obstacles[0] = ball;
   EXPECT_FALSE(walker.findSudden(seen, map, Pose2D{}));  // the run starts again
   ASSERT_TRUE(walker.findSudden(seen, map, Pose2D{}));
+  // A line below the floor in one group with a lobe above it (the group's highest point is above
+  // the floor, as on random floor 1006): still a line, whatever the group's height.
+  {
+    Walker fresh(config, foot);
+    Obstacle mixed = line;
+    mixed.height = 0.045;
+    mixed.surface_heights.assign(36, -0.01f);
+    mixed.surface_heights.resize(39, 0.045f);
+    ObstacleResult both;
+    both.obstacles = {ball, mixed};
+    EXPECT_FALSE(fresh.findSudden(both, map, Pose2D{}));
+    EXPECT_FALSE(fresh.findSudden(both, map, Pose2D{}));
+  }
   // Beside the path (not in front of the soles) or far: not sudden.
   seen.obstacles[0].min.y() = 0.12;
   seen.obstacles[0].max.y() = 0.16;
