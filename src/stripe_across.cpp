@@ -75,13 +75,22 @@ MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold
   }
   // Rows where no column stands above its limit add nothing (zeros) to any sum: only the rows from
   // the first to the last that does are summed, in the same order, so the sums are the same bits.
-  int begin = count, end = 0;
+  // Each lane's first and last such row, in vector lanes without a branch (whether a row holds the
+  // stripe is hard to predict), then the extremes over the lanes.
+  typedef float F8 __attribute__((vector_size(32)));
+  typedef std::int32_t I8 __attribute__((vector_size(32)));
+  F8 lanes_limit;
+  std::memcpy(&lanes_limit, limit, sizeof lanes_limit);
+  I8 first = I8{} + count, last = I8{};
   for (int i = 0; i < count; ++i) {
-    int above = 0;  // without a branch: whether a row holds the stripe is hard to predict
-    for (int j = 0; j < kLanes; ++j) above |= c.v[i][j] > limit[j] ? 1 : 0;
-    begin = std::min(begin, above ? i : count);
-    end = std::max(end, above * (i + 1));
+    F8 row;
+    std::memcpy(&row, c.v[i], sizeof row);
+    const I8 above = row > lanes_limit, at = I8{} + i;
+    first = (above & (first < at ? first : at)) | (~above & first);
+    last = (above & (at + 1)) | (~above & last);
   }
+  int begin = count, end = 0;
+  for (int j = 0; j < kLanes; ++j) begin = std::min(begin, first[j]), end = std::max(end, last[j]);
   for (int i = begin; i < end; ++i) {
     const float d = static_cast<float>(i) - half, d2 = d * d;
     for (int j = 0; j < kLanes; ++j) {
