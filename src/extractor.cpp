@@ -245,12 +245,11 @@ void Extractor::acrossSlit(const cv::Mat& image, const ProfileParams& params, st
   across.fit_threshold = params.fit_threshold;
   across.max_move = params.half_window;
   thread_local SlitColumns columns;
-  columns.clear();
+  columns.clear(across);
   for (std::size_t k = begin; k < end; ++k) {
     const Task& t = tasks_[along_slits_[k]];
-    if (!std::isfinite(centres[along_slits_[k]])) continue;
-    across.half_rows = t.across_half_rows;
-    columns.plan(t.row, centres[along_slits_[k]], t.slope, across);
+    if (std::isfinite(centres[along_slits_[k]]))
+      columns.plan(t.row, centres[along_slits_[k]], t.slope, t.across_half_rows);
   }
   columns.measure<T>(image);
   std::size_t planned = 0;

@@ -168,18 +168,18 @@ void measureColumns(const cv::Mat& image, const long* xs, const long* first_rows
 }
 
 /// The columns a point measures around `c`: x0 and each one's first row.
-void pointColumns(int row, double c, double slope, const AcrossStripe& p, long* xs,
+void pointColumns(int row, double c, double slope, int half_columns, int half_rows, long* xs,
                   long* first_rows) {
-  const long x0 = std::lround(c) - p.half_columns;
+  const long x0 = std::lround(c) - half_columns;
   const double per_column = 1.0 / slope;
-  for (int j = 0; j < 2 * p.half_columns + 1; ++j)
-    xs[j] = x0 + j, first_rows[j] = firstRowOf(row, c, per_column, p.half_rows, x0 + j);
+  for (int j = 0; j < 2 * half_columns + 1; ++j)
+    xs[j] = x0 + j, first_rows[j] = firstRowOf(row, c, per_column, half_rows, x0 + j);
 }
 
 /// Whether a point of these parameters is measured across the stripe at all.
-bool measuredAcross(double slope, const AcrossStripe& p) {
-  return std::abs(slope) >= kAcrossMinSlope && p.half_rows >= 2 &&
-         2 * p.half_rows + 1 <= kMaxRows && 2 * p.half_columns + 1 <= kLanes;
+bool measuredAcross(double slope, int half_columns, int half_rows) {
+  return std::abs(slope) >= kAcrossMinSlope && half_rows >= 2 && 2 * half_rows + 1 <= kMaxRows &&
+         2 * half_columns + 1 <= kLanes;
 }
 
 /// The centre across the stripe from the row's centre `start`: the signal-weighted mean of the
@@ -219,7 +219,7 @@ template <typename T>
 void ownColumns(const cv::Mat& image, int row, double c, double slope, const AcrossStripe& p,
                 const AcrossColumn** measured, AcrossColumn* own) {
   long xs[kLanes], first_rows[kLanes];
-  pointColumns(row, c, slope, p, xs, first_rows);
+  pointColumns(row, c, slope, p.half_columns, p.half_rows, xs, first_rows);
   const int n = 2 * p.half_columns + 1;
   measureColumns<T>(image, xs, first_rows, p.half_rows, n, p.fit_threshold, p.min_contrast, own);
   for (int j = 0; j < n; ++j) measured[j] = &own[j];
@@ -230,31 +230,31 @@ constexpr std::uint32_t kNoColumn = std::numeric_limits<std::uint32_t>::max();
 
 }  // namespace
 
-void SlitColumns::clear() {
+void SlitColumns::clear(const AcrossStripe& limits) {
+  params_ = limits;
   columns_.clear(), uses_.clear(), points_.clear();
   std::fill(std::begin(slots_), std::end(slots_), kNoColumn);
 }
 
-void SlitColumns::plan(int row, double centre, double slope, const AcrossStripe& p) {
-  points_.emplace_back();
-  Point& point = points_.back();
-  point.row = row, point.half_rows = p.half_rows, point.start = centre, point.slope = slope;
+void SlitColumns::plan(int row, double centre, double slope, int half_rows) {
+  Point& point = points_.emplace_back();
+  point.row = row, point.half_rows = half_rows, point.start = centre, point.slope = slope;
   point.first_use = kNotAcross;
-  if (!measuredAcross(slope, p)) return;
-  params_ = p;
+  const int half_columns = params_.half_columns;
+  if (!measuredAcross(slope, half_columns, half_rows)) return;
   point.first_use = uses_.size();
   long xs[kLanes], first_rows[kLanes];
-  pointColumns(row, centre, slope, p, xs, first_rows);
-  for (int j = 0; j < 2 * p.half_columns + 1; ++j) {
+  pointColumns(row, centre, slope, half_columns, half_rows, xs, first_rows);
+  for (int j = 0; j < 2 * half_columns + 1; ++j) {
     std::uint32_t& slot = slots_[static_cast<std::size_t>(xs[j]) & (kSlots - 1)];
     const bool same = slot != kNoColumn && columns_[slot].x == xs[j] &&
                       columns_[slot].first_row == first_rows[j] &&
-                      columns_[slot].half_rows == p.half_rows;
+                      columns_[slot].half_rows == half_rows;
     if (!same) {
       slot = static_cast<std::uint32_t>(columns_.size());
       columns_.emplace_back();  // measured by measure()
       AcrossColumn& m = columns_.back();
-      m.x = xs[j], m.first_row = first_rows[j], m.half_rows = p.half_rows;
+      m.x = xs[j], m.first_row = first_rows[j], m.half_rows = half_rows;
     }
     uses_.push_back(slot);
   }
@@ -299,7 +299,7 @@ template bool SlitColumns::centre<std::uint16_t>(const cv::Mat&, std::size_t, do
 
 bool acrossStripeCentre(const cv::Mat& image, int row, double centre, double slope,
                         const AcrossStripe& params, double* out) {
-  if (!measuredAcross(slope, params)) return false;
+  if (!measuredAcross(slope, params.half_columns, params.half_rows)) return false;
   auto columns = [&](double c, int, const AcrossColumn** measured, AcrossColumn* own) {
     if (image.depth() == CV_8U)
       ownColumns<std::uint8_t>(image, row, c, slope, params, measured, own);

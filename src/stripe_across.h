@@ -64,10 +64,11 @@ struct AcrossColumn {
 /// measure() once (eight columns at a time, none twice), then centre() each planned point.
 class SlitColumns {
  public:
-  void clear();
+  /// Starts a slit whose points are measured with `limits` (all but half_rows, each point's own).
+  void clear(const AcrossStripe& limits);
   /// Plans the point on `row` whose centre on the row is `centre`, of a stripe of direction
-  /// `slope` (du/dv), with `p`'s window and limits (all but half_rows the same along a slit).
-  void plan(int row, double centre, double slope, const AcrossStripe& p);
+  /// `slope` (du/dv), its columns `half_rows` each side of their expected crossings.
+  void plan(int row, double centre, double slope, int half_rows);
   /// Measures every planned column in `image` (CV_8U when T is std::uint8_t, else CV_16U).
   template <typename T>
   void measure(const cv::Mat& image);
