@@ -17,22 +17,46 @@ namespace {
 constexpr int kLanes = 8;     // columns measured together (7 used with half_columns = 3)
 constexpr int kMaxRows = 32;  // longest column profile [px]
 
-/// ln(x) of a normal float x > 0 to within 4e-7, without a division, written so that a loop over
-/// lanes vectorizes: x = 2^e m with m in [sqrt(1/2), sqrt(2)), f = m - 1, ln x = e ln 2 + f +
-/// f^2 q(f), q the degree-6 polynomial of the row's eight-lane fit (slit_profile_eight.cpp),
-/// summed in pairs of terms.
-inline float lanesLog(float x) {
-  std::int32_t bits;
+// The helpers below pass eight-lane vectors by value; each is inlined into the AVX2 and default
+// clones of its caller, so no call ever has the ABI GCC warns about.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+/// Eight float or int lanes (GCC's vector extension: one AVX register, or two SSE ones).
+typedef float F8 __attribute__((vector_size(32)));
+typedef std::int32_t I8 __attribute__((vector_size(32)));
+typedef std::uint32_t U8 __attribute__((vector_size(32)));
+
+__attribute__((always_inline)) inline F8 loadLanes(const float* p) {
+  F8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+__attribute__((always_inline)) inline void storeLanes(float* p, F8 v) {
+  std::memcpy(p, &v, sizeof v);
+}
+/// Row i of the pixels as floats.
+__attribute__((always_inline)) inline F8 pixelLanes(const std::uint16_t* p) {
+  typedef std::uint16_t P8 __attribute__((vector_size(16)));
+  P8 v;
+  std::memcpy(&v, p, sizeof v);
+  return __builtin_convertvector(v, F8);
+}
+
+/// ln(x) of normal floats x > 0 to within 4e-7, without a division: x = 2^e m with m in
+/// [sqrt(1/2), sqrt(2)), f = m - 1, ln x = e ln 2 + f + f^2 q(f), q the degree-6 polynomial of the
+/// row's eight-lane fit (slit_profile_eight.cpp), summed in pairs of terms.
+__attribute__((always_inline)) inline F8 lanesLog(F8 x) {
+  I8 bits;
   std::memcpy(&bits, &x, sizeof bits);
-  const std::int32_t e = (bits - 0x3f3504f3) >> 23;  // the borrow picks m's interval
-  const std::int32_t m_bits = bits - static_cast<std::int32_t>(static_cast<std::uint32_t>(e) << 23);
-  float m;
+  const I8 e = (bits - 0x3f3504f3) >> 23;  // the borrow picks m's interval
+  const I8 m_bits = bits - (I8)((U8)e << 23);
+  F8 m;
   std::memcpy(&m, &m_bits, sizeof m);
-  const float f = m - 1.0f, f2 = f * f, f4 = f2 * f2;
-  const float q01 = 0.333341136f * f - 0.500000912f, q23 = 0.199290571f * f - 0.249824512f;
-  const float q456 = -0.101885865f * f2 + (0.15984096f * f - 0.171323873f);
-  const float q = f4 * q456 + (f2 * q23 + q01);
-  return static_cast<float>(e) * 0.693147181f + (f2 * q + f);
+  const F8 f = m - 1.0f, f2 = f * f, f4 = f2 * f2;
+  const F8 q01 = 0.333341136f * f - 0.500000912f, q23 = 0.199290571f * f - 0.249824512f;
+  const F8 q456 = -0.101885865f * f2 + (0.15984096f * f - 0.171323873f);
+  const F8 q = f4 * q456 + (f2 * q23 + q01);
+  return __builtin_convertvector(e, F8) * 0.693147181f + (f2 * q + f);
 }
 
 /// The columns' profiles, row i of column j at v[i][j], and the sums of each column's fit.
@@ -48,60 +72,51 @@ struct Columns {
   alignas(32) float t0[kLanes], t1[kLanes], t2[kLanes];
 };
 
-/// Background, contrast and the fit's sums of every column at once (the loops over lanes run in
-/// vector registers; AVX2 where the CPU has it).
+/// Each column's values above its background line (into c.v), its contrast (c.top) and the limit
+/// of the fit (+inf-like in an empty lane, which then sums nothing).
+__attribute__((always_inline)) inline F8 backgroundAndLimit(Columns& c, int count,
+                                                            float fit_threshold) {
+  const F8 left = 0.5f * (pixelLanes(c.pixels[0]) + pixelLanes(c.pixels[1]));
+  const F8 right = 0.5f * (pixelLanes(c.pixels[count - 1]) + pixelLanes(c.pixels[count - 2]));
+  const F8 tilt = (right - left) / static_cast<float>(count - 2);
+  F8 top = {};
+  for (int i = 0; i < count; ++i) {
+    const F8 v = pixelLanes(c.pixels[i]) - (left + tilt * (static_cast<float>(i) - 0.5f));
+    storeLanes(c.v[i], v);
+    top = top < v ? v : top;
+  }
+  top *= loadLanes(c.used);
+  storeLanes(c.top, top);
+  const F8 none = F8{} + 3.4e38f;
+  return top > 0 ? fit_threshold * top : none;
+}
+
+/// Background, contrast and the fit's sums of every column at once (the lanes in vector
+/// registers; AVX2 where the CPU has it).
 MULTISLIT_AVX2_CLONES void sumColumns(Columns& c, int count, float fit_threshold) {
-  const float half = 0.5f * static_cast<float>(count - 1);
-  for (int i = 0; i < count; ++i)
-    for (int j = 0; j < kLanes; ++j) c.v[i][j] = static_cast<float>(c.pixels[i][j]);
-  alignas(32) float left[kLanes], tilt[kLanes], top[kLanes];
-  for (int j = 0; j < kLanes; ++j) {
-    left[j] = 0.5f * (c.v[0][j] + c.v[1][j]);
-    const float right = 0.5f * (c.v[count - 1][j] + c.v[count - 2][j]);
-    tilt[j] = (right - left[j]) / static_cast<float>(count - 2);
-    top[j] = 0;
-  }
-  for (int i = 0; i < count; ++i)
-    for (int j = 0; j < kLanes; ++j) {
-      c.v[i][j] -= left[j] + tilt[j] * (static_cast<float>(i) - 0.5f);
-      top[j] = std::max(top[j], c.v[i][j]);
-    }
-  alignas(32) float limit[kLanes];
-  for (int j = 0; j < kLanes; ++j) {
-    c.top[j] = top[j] * c.used[j];
-    limit[j] = c.top[j] > 0 ? fit_threshold * c.top[j] : 3.4e38f;  // an empty lane sums nothing
-    c.sum[j] = c.moment[j] = c.w0[j] = c.s1[j] = c.s2[j] = c.s3[j] = c.s4[j] = c.t0[j] = c.t1[j] =
-        c.t2[j] = 0;
-  }
+  const F8 limit = backgroundAndLimit(c, count, fit_threshold);
   // Rows where no column stands above its limit add nothing (zeros) to any sum: only the rows from
   // the first to the last that does are summed, in the same order, so the sums are the same bits.
-  // Each lane's first and last such row, in vector lanes without a branch (whether a row holds the
-  // stripe is hard to predict), then the extremes over the lanes.
-  typedef float F8 __attribute__((vector_size(32)));
-  typedef std::int32_t I8 __attribute__((vector_size(32)));
-  F8 lanes_limit;
-  std::memcpy(&lanes_limit, limit, sizeof lanes_limit);
-  I8 first = I8{} + count, last = I8{};
-  for (int i = 0; i < count; ++i) {
-    F8 row;
-    std::memcpy(&row, c.v[i], sizeof row);
-    const I8 above = row > lanes_limit, at = I8{} + i;
-    first = (above & (first < at ? first : at)) | (~above & first);
-    last = (above & (at + 1)) | (~above & last);
-  }
-  int begin = count, end = 0;
-  for (int j = 0; j < kLanes; ++j) begin = std::min(begin, first[j]), end = std::max(end, last[j]);
+  // Bit i of `rows`: row i holds the stripe in some lane (no branch: that is hard to predict).
+  U8 lanes_rows = {}, bit = U8{} + 1;
+  for (int i = 0; i < count; ++i, bit += bit) lanes_rows |= (U8)(loadLanes(c.v[i]) > limit) & bit;
+  std::uint32_t rows = 0;
+  for (int j = 0; j < kLanes; ++j) rows |= lanes_rows[j];
+  const int begin = rows ? __builtin_ctz(rows) : count, end = rows ? 32 - __builtin_clz(rows) : 0;
+  const float half = 0.5f * static_cast<float>(count - 1);
+  F8 sum = {}, moment = {}, w0 = {}, s1 = {}, s2 = {}, s3 = {}, s4 = {}, t0 = {}, t1 = {}, t2 = {};
   for (int i = begin; i < end; ++i) {
     const float d = static_cast<float>(i) - half, d2 = d * d;
-    for (int j = 0; j < kLanes; ++j) {
-      const float v = c.v[i][j];
-      const float a = v > limit[j] ? v : 0.0f, w = a * a;
-      const float wl = w * lanesLog(std::max(v, 1e-20f));
-      c.sum[j] += a, c.moment[j] += a * d;
-      c.w0[j] += w, c.s1[j] += w * d, c.s2[j] += w * d2, c.s3[j] += w * d2 * d;
-      c.s4[j] += w * d2 * d2, c.t0[j] += wl, c.t1[j] += wl * d, c.t2[j] += wl * d2;
-    }
+    const F8 v = loadLanes(c.v[i]);
+    const F8 a = (F8)((I8)(v > limit) & (I8)v), w = a * a;  // v where above the limit, else 0
+    const F8 wl = w * lanesLog(v < 1e-20f ? F8{} + 1e-20f : v);
+    sum += a, moment += a * d;
+    w0 += w, s1 += w * d, s2 += w * d2, s3 += w * d2 * d;
+    s4 += w * d2 * d2, t0 += wl, t1 += wl * d, t2 += wl * d2;
   }
+  storeLanes(c.sum, sum), storeLanes(c.moment, moment), storeLanes(c.w0, w0);
+  storeLanes(c.s1, s1), storeLanes(c.s2, s2), storeLanes(c.s3, s3), storeLanes(c.s4, s4);
+  storeLanes(c.t0, t0), storeLanes(c.t1, t1), storeLanes(c.t2, t2);
 }
 
 /// Every column's centre [rows from the middle row]: the log-parabola's vertex (the normal
