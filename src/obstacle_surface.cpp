@@ -1,5 +1,7 @@
 #include "obstacle_surface.h"
 
+#include "slit_run.h"
+
 #include "multislit/plane_model.h"
 
 #include <algorithm>
@@ -21,15 +23,15 @@ pcl::Indices surfacePoints(const pcl::PointCloud<PointRDM>& cloud, const pcl::In
     return cloud[static_cast<std::size_t>(sorted[j])];
   };
   const auto above = [&](std::size_t j) { return planeResidual(at(j), plane) > 0; };
-  // Each point continues the run of the nearest point before it, at most 2 cells back on its
-  // slit, on its side of the floor and within max_step of its dk.
+  // Each point continues the run of the nearest point before it, at most kRunReach cells back on
+  // its slit, on its side of the floor and within max_step of its dk.
   const std::size_t n = sorted.size();
   run.resize(n);
   length.assign(n, 0);
   for (std::size_t j = 0; j < n; ++j) {
     run[j] = j;
     for (std::size_t k = j; k-- > 0;) {
-      if (sorted[k] / width != sorted[j] / width || sorted[j] - sorted[k] > 2) break;
+      if (sorted[k] / width != sorted[j] / width || sorted[j] - sorted[k] > kRunReach) break;
       if (above(k) == above(j) && std::abs(at(k).dk - at(j).dk) <= max_step) {
         run[j] = run[k];
         break;

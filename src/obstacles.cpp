@@ -3,6 +3,7 @@
 
 #include "config_check.h"
 #include "obstacle_surface.h"
+#include "slit_run.h"
 
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
@@ -81,6 +82,10 @@ std::size_t Obstacle::surfacePointsAbove(double least) const {
                                                 [least](float h) { return h >= least; }));
 }
 
+std::size_t Obstacle::surfacePointsBelow(double most) const {
+  return surface_heights.size() - surfacePointsAbove(most);
+}
+
 std::size_t ObstacleResult::pointCount() const {
   std::size_t n = 0;
   for (const Obstacle& o : obstacles) n += o.pointCount();
@@ -109,7 +114,7 @@ void forEachRun(const pcl::PointCloud<PointRDM>& cloud, const pcl::Indices& sort
   std::size_t start = 0;
   for (std::size_t i = 1; i <= sorted.size(); ++i) {
     const bool continues = i < sorted.size() && sorted[i] / width == sorted[i - 1] / width &&
-                           sorted[i] - sorted[i - 1] <= 2 &&
+                           sorted[i] - sorted[i - 1] <= detail::kRunReach &&
                            (!plane || above(sorted[i]) == above(sorted[i - 1]));
     if (continues) continue;
     run(start, i);

@@ -1,14 +1,12 @@
 #include "stray_runs.h"
 
+#include "slit_run.h"
+
 #include <cmath>
 #include <cstdlib>
 #include <limits>
 
 namespace multislit::detail {
-
-namespace {
-constexpr int kReach = 2;  // rows: a gap of one row is allowed inside a run and to a neighbour
-}  // namespace
 
 std::size_t dropStrayRuns(std::vector<SlitSample>& samples, int longest, double step) {
   if (longest <= 0) return 0;
@@ -19,7 +17,7 @@ std::size_t dropStrayRuns(std::vector<SlitSample>& samples, int longest, double 
     return i;
   };
   const auto near = [&](std::size_t a, std::size_t b) {
-    return std::abs(samples[b].row - samples[a].row) <= kReach;
+    return std::abs(samples[b].row - samples[a].row) <= kRunReach;
   };
   std::size_t dropped = 0;
   std::size_t before = n;  // the last measured point before the run, or n

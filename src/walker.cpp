@@ -94,9 +94,7 @@ std::optional<Obstacle> Walker::findSudden(const ObstacleResult& obstacles, cons
   // points below the floor, wherever the group's highest point lies: its two lobes may join one.
   std::vector<Box> lines;
   for (const Obstacle& b : obstacles.obstacles)
-    if (std::count_if(b.surface_heights.begin(), b.surface_heights.end(),
-                      [](float h) { return h < 0; }) >= static_cast<std::ptrdiff_t>(points))
-      lines.push_back(worldBox(b, body));
+    if (b.surfacePointsBelow(0.0) >= points) lines.push_back(worldBox(b, body));
   const auto besideLine = [&](const Box& box) {
     for (const std::vector<Box>* frame : {&lines, &lines_before_})
       for (const Box& line : *frame)

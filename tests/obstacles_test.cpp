@@ -265,6 +265,8 @@ TEST(ObstacleClusterer, SpeckleJoinsAGroupButIsNoSurface) {
   EXPECT_GT(o.height, 0.05);  // what the speckle reaches
   EXPECT_EQ(o.surfacePointsAbove(0.025), 0u);
   EXPECT_EQ(o.surfacePointsAbove(0.004), 5u);
+  EXPECT_EQ(o.surfacePointsBelow(0.025), 5u);
+  EXPECT_EQ(o.surfacePointsBelow(0.0), 0u);  // none below the floor
   // Without the rule every point on one side of the floor in a row is a surface.
   ObstacleClustererConfig any;
   any.max_step = 1000;

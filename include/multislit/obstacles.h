@@ -90,6 +90,8 @@ struct Obstacle {
   std::vector<float> surface_heights;
   /// Surface points at least `least` [m] above the floor.
   std::size_t surfacePointsAbove(double least) const;
+  /// Surface points less than `most` [m] above the floor (below it: `most` 0).
+  std::size_t surfacePointsBelow(double most) const;
   std::size_t pointCount() const { return indices.size(); }
 };
 
