@@ -3,6 +3,7 @@
 #include "plane_kernels.h"
 
 #include "avx2_clones.h"
+#include "lanes.h"
 
 #include "rdm_simd.h"
 
@@ -25,8 +26,8 @@ MULTISLIT_AVX2_CLONES unsigned countNear(const float* u, const float* v, const f
 // 8 points per step in float, added to double every 256 points.
 MULTISLIT_AVX2_CLONES InlierSums sumInliers(const float* u, const float* v, const float* dk,
                                             std::size_t size, float a, float b, float c, float t) {
-  typedef float F8 __attribute__((vector_size(32)));
-  typedef std::int32_t I8 __attribute__((vector_size(32)));
+  using lanes::F8;
+  using lanes::I8;
   constexpr std::size_t kLanes = 8, kFlush = 256;
   InlierSums out;
   const F8 one = {1, 1, 1, 1, 1, 1, 1, 1};

@@ -1,6 +1,7 @@
 #include "stripe_across.h"
 
 #include "avx2_clones.h"
+#include "lanes.h"
 #include "slit_profile_simd.h"
 
 #include <algorithm>
@@ -21,10 +22,9 @@ constexpr int kMaxRows = 32;  // longest column profile [px]
 // clones of its caller, so no call ever has the ABI GCC warns about.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
-/// Eight float or int lanes (GCC's vector extension: one AVX register, or two SSE ones).
-typedef float F8 __attribute__((vector_size(32)));
-typedef std::int32_t I8 __attribute__((vector_size(32)));
-typedef std::uint32_t U8 __attribute__((vector_size(32)));
+using lanes::F8;
+using lanes::I8;
+using lanes::U8;
 
 __attribute__((always_inline)) inline F8 loadLanes(const float* p) {
   F8 v;
