@@ -1,7 +1,8 @@
 // Eight float or 32-bit integer lanes in GCC's vector extension (one AVX register, or two SSE
 // ones), for the kernels compiled twice by MULTISLIT_AVX2_CLONES. Private to the core library. A
-// function that takes or returns them must be inlined into such a kernel, and its file must
-// silence -Wpsabi: compiled for plain x86-64, GCC warns that their ABI needs AVX.
+// function that returns them must be inlined into such a kernel, and its file must silence
+// -Wpsabi (compiled for plain x86-64, GCC warns that their ABI needs AVX); it takes them by
+// reference, as by value GCC notes an ABI change even then.
 #pragma once
 
 #include <cstdint>

@@ -18,8 +18,9 @@ namespace {
 constexpr int kLanes = 8;     // columns measured together (7 used with half_columns = 3)
 constexpr int kMaxRows = 32;  // longest column profile [px]
 
-// The helpers below pass eight-lane vectors by value; each is inlined into the AVX2 and default
-// clones of its caller, so no call ever has the ABI GCC warns about.
+// The helpers below return eight-lane vectors by value (and take them by reference: a parameter by
+// value draws GCC's note on its ABI whatever the warning's setting); each is inlined into the AVX2
+// and default clones of its caller, so no call ever has the ABI GCC warns about.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 using lanes::F8;
@@ -31,7 +32,7 @@ __attribute__((always_inline)) inline F8 loadLanes(const float* p) {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-__attribute__((always_inline)) inline void storeLanes(float* p, F8 v) {
+__attribute__((always_inline)) inline void storeLanes(float* p, const F8& v) {
   std::memcpy(p, &v, sizeof v);
 }
 /// Row i of the pixels as floats.
@@ -45,7 +46,7 @@ __attribute__((always_inline)) inline F8 pixelLanes(const std::uint16_t* p) {
 /// ln(x) of normal floats x > 0 to within 4e-7, without a division: x = 2^e m with m in
 /// [sqrt(1/2), sqrt(2)), f = m - 1, ln x = e ln 2 + f + f^2 q(f), q the degree-6 polynomial of the
 /// row's eight-lane fit (slit_profile_eight.cpp), summed in pairs of terms.
-__attribute__((always_inline)) inline F8 lanesLog(F8 x) {
+__attribute__((always_inline)) inline F8 lanesLog(const F8& x) {
   I8 bits;
   std::memcpy(&bits, &x, sizeof bits);
   const I8 e = (bits - 0x3f3504f3) >> 23;  // the borrow picks m's interval
