@@ -120,8 +120,6 @@ class Extractor {
   /// Each task's IdealTask.
   void prepareIdeal();
   template <typename T>
-  void prefetchRegions(const cv::Mat& image, std::size_t begin, std::size_t count) const;
-  template <typename T>
   void measureAll(const cv::Mat& image, const ProfileParams& params,
                   pcl::PointCloud<PointRDM>& cloud, ExtractionStats& stats) const;
 
