@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -27,6 +28,9 @@ struct FrameEvidence {
   static constexpr int kKindBits = 3;
   std::vector<std::uint64_t> marks;
   std::vector<std::uint64_t> sort_buffer;  ///< sortMarks()'s room, kept across frames
+  static constexpr int kRecentBits = 9;
+  /// The last free mark (kRay, kFloor) at each hash of a mark: repeats of recent ones are left out.
+  std::array<std::uint64_t, std::size_t{1} << kRecentBits> recent_free;
   /// One slit (RDMap row) in this frame: its floor points' noise and where its measured run ends.
   struct Slit {
     double sum_sq = 0.0;      ///< squared residuals of its floor points [px^2]
@@ -42,11 +46,22 @@ struct FrameEvidence {
   std::vector<SweepPoint> sweep_points;
   std::vector<octomap::OcTreeKey> sweep_keys;
 
+  /// Starts a frame's marks.
+  void clearMarks() {
+    marks.clear();
+    recent_free.fill(~std::uint64_t{0});  // no mark: its kind bits are not a Kind
+  }
   void mark(const octomap::OcTreeKey& key, Kind kind) {
     const std::uint64_t m = VoxelCode::of(key) << kKindBits | kind;
-    // The points of a slit come in order, several per voxel: a repeat of the last mark adds
-    // nothing (except for weak points, which are counted), and leaves less to sort.
-    if (kind != kWeak && !marks.empty() && marks.back() == m) return;
+    if (kind <= kFloor) {
+      // A voxel marked free once needs no second such mark (apply() asks only whether it has
+      // one); rays to neighbouring floor points cross the same voxels near their top.
+      std::uint64_t& seen = recent_free[(m * 0x9e3779b97f4a7c15u) >> (64 - kRecentBits)];
+      if (seen == m) return;
+      seen = m;
+    } else if (kind != kWeak && !marks.empty() && marks.back() == m) {
+      return;  // a slit's points come in order, several per voxel; weak points are counted
+    }
     marks.push_back(m);
   }
   /// `marks` in ascending order (what std::sort gives), by a radix sort over digits of 11 bits

@@ -135,7 +135,7 @@ void OccupancyMap::collect(const pcl::PointCloud<PointRDM>& cloud, const FloorRe
                            const Eigen::Isometry3d& world_from_camera,
                            const Eigen::Vector3d& light_origin_camera, FrameEvidence& e) {
   const MapFrame map{cloud, obstacles.floor, world_from_camera, *tree_, config_.resolution};
-  e.marks.clear();
+  e.clearMarks();
   e.sweep_points.clear();
   e.sweep_keys.clear();
   const auto evidence = [&](const Eigen::Vector3d& m, bool above, bool strong, bool tall) {
