@@ -37,8 +37,9 @@ class RowCursor {
 
 void FrameEvidence::sortMarks() {
   if (marks.empty()) return;
-  std::uint64_t differ = 0;  // the bits in which some mark differs from the first
+  std::uint64_t differ = 0;  // the bits of the voxel in which some mark differs from the first
   for (const std::uint64_t m : marks) differ |= m ^ marks.front();
+  differ &= ~std::uint64_t{(1u << kKindBits) - 1};  // the kinds of one voxel stay in any order
   sort_buffer.resize(marks.size());
   constexpr int kDigitBits = 11;  // 2048 counters: in the first level cache
   constexpr std::uint64_t kDigit = (1u << kDigitBits) - 1;

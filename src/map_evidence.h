@@ -64,9 +64,9 @@ struct FrameEvidence {
     }
     marks.push_back(m);
   }
-  /// `marks` in ascending order (what std::sort gives), by a radix sort over digits of 11 bits
-  /// placed where they differ: a frame's voxels lie near each other, so most bits of their keys
-  /// are the same.
+  /// `marks` in ascending order of their voxels (the marks of one voxel together, in the order
+  /// they were made), by a radix sort over digits of 11 bits placed where the voxels differ: a
+  /// frame's voxels lie near each other, so most bits of their keys are the same.
   void sortMarks();
 
   /// Each slit's own noise (the outer slits, dimmer and farther, are noisier than the frame's
