@@ -12,9 +12,10 @@ namespace multislit {
 
 namespace {
 
-/// Asks for the image's rows some way ahead of the row being measured. A new frame is in memory,
-/// not in the cache; whole rows in order are what the CPU's own prefetcher streams at full speed,
-/// where the regions alone (a part of each row) left the measure waiting on memory.
+/// Asks for the image's rows, every line of each in order, some way ahead of the row being
+/// measured. A new frame is in memory, not in the cache: asked for this way it arrives while the
+/// rows before it are measured, where the regions alone, a few batches ahead, left the measure
+/// waiting on memory (and every other line, left to the CPU's own prefetcher, is slower).
 class RowPrefetch {
  public:
   /// How far ahead: well inside the second-level cache (32 to 128 KB time alike; 8 KB ahead, or
