@@ -77,52 +77,84 @@ MetricSums sumAboutOrigin(const PointRDM* points, const pcl::index_t* indices, s
   return out;
 }
 
+/// The float partial sums of one block of up to kFlushPoints points, in AVX lanes: the even points
+/// in lanes 0 .. 3, the odd ones in lanes 4 .. 7 (lanes 3 and 7, data[3], are summed but never
+/// read).
+struct BlockLanes {
+  __m256 sum, squares, cross;
+};
+
+/// Adds the points `even` and `odd` (two floats a point's x, y, z, data[3]) about `origin` to
+/// `lanes`, as sumAboutOrigin() does; returns how many of the two have x, y, z.
+__attribute__((target("avx2"), always_inline)) inline std::size_t addPair(BlockLanes& lanes,
+                                                                          const float* even,
+                                                                          const float* odd,
+                                                                          const __m256& origin) {
+  const __m256 xyz = _mm256_castsi256_ps(_mm256_setr_epi32(-1, -1, -1, 0, -1, -1, -1, 0));
+  const __m256 zero = _mm256_setzero_ps();
+  constexpr int kRotate = _MM_SHUFFLE(3, 0, 2, 1);  // (y, z, x, w) in each half
+  const __m256 q =
+      _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(even)), _mm_loadu_ps(odd), 1);
+  const __m256 finite = _mm256_cmp_ps(_mm256_sub_ps(q, q), zero, _CMP_EQ_OQ);
+  __m256 d = _mm256_sub_ps(q, origin);
+  std::size_t points = 2;  // nearly always both points have x, y, z: lanes 0 .. 2 kept as they are
+  if ((_mm256_movemask_ps(finite) & 0x77) != 0x77) {
+    const __m256 keep =
+        _mm256_and_ps(_mm256_and_ps(finite, _mm256_permute_ps(finite, kRotate)),
+                      _mm256_and_ps(_mm256_permute_ps(finite, _MM_SHUFFLE(3, 1, 0, 2)), xyz));
+    d = _mm256_and_ps(d, keep);
+    points = static_cast<std::size_t>(__builtin_popcount(_mm256_movemask_ps(keep)) / 3);
+  }
+  lanes.sum = _mm256_add_ps(lanes.sum, d);
+  lanes.squares = _mm256_add_ps(lanes.squares, _mm256_mul_ps(d, d));
+  lanes.cross = _mm256_add_ps(lanes.cross, _mm256_mul_ps(d, _mm256_permute_ps(d, kRotate)));
+  return points;
+}
+
+/// Adds a block's partial sums to the double totals, the even points' lanes with the odd ones'.
+__attribute__((target("avx2"))) void flushBlock(MetricSums& out, const BlockLanes& lanes) {
+  alignas(32) float l[3][8];
+  _mm256_store_ps(l[0], lanes.sum);
+  _mm256_store_ps(l[1], lanes.squares);
+  _mm256_store_ps(l[2], lanes.cross);
+  addLanePairs(out.sum, l[0], l[0] + 4);
+  addLanePairs(out.squares, l[1], l[1] + 4);
+  addLanePairs(out.cross, l[2], l[2] + 4);
+}
+
 /// sumAboutOrigin() with the even points in lanes 0 .. 3 of one AVX vector and the odd ones in
 /// lanes 4 .. 7: every lane sees the same float operations in the same order, in half the
-/// instructions. Without AVX2's FMA (not enabled here) no product is fused into its sum.
+/// instructions. Two full blocks are summed side by side, each in its own lanes, and flushed in
+/// their order: the same bits, with twice the adds in flight. Without AVX2's FMA (not enabled
+/// here) no product is fused into its sum.
 __attribute__((target("avx2"))) MetricSums sumAboutOriginAvx2(const PointRDM* points,
                                                               const pcl::index_t* indices,
                                                               std::size_t n, float x0, float y0,
                                                               float z0) {
   const __m256 origin = _mm256_setr_ps(x0, y0, z0, 0.0f, x0, y0, z0, 0.0f);
-  const __m256 xyz = _mm256_castsi256_ps(_mm256_setr_epi32(-1, -1, -1, 0, -1, -1, -1, 0));
   const __m256 zero = _mm256_setzero_ps();
   // The partner of a block's last even point when it has none: not finite, so it adds +0, which
   // leaves every partial sum as it is (they start at +0 and so never hold -0).
   const float none[4] = {std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f, 0.0f};
-  constexpr int kRotate = _MM_SHUFFLE(3, 0, 2, 1);  // (y, z, x, w) in each half
+  const auto at = [&](std::size_t k) { return points[indices[k]].data; };
   MetricSums out;
-  for (std::size_t k = 0; k < n;) {
-    __m256 sum = zero, squares = zero, cross = zero;
-    for (const std::size_t stop = std::min(n, k + kFlushPoints); k < stop; k += 2) {
-      const float* odd = k + 1 < stop ? points[indices[k + 1]].data : none;
-      const __m256 q = _mm256_insertf128_ps(
-          _mm256_castps128_ps256(_mm_loadu_ps(points[indices[k]].data)), _mm_loadu_ps(odd), 1);
-      const __m256 finite = _mm256_cmp_ps(_mm256_sub_ps(q, q), zero, _CMP_EQ_OQ);
-      __m256 d = _mm256_sub_ps(q, origin);
-      // Nearly always both points have x, y, z: then lanes 0 .. 2 of each half are kept as they
-      // are (lanes 3 and 7, data[3], are summed but never read).
-      if ((_mm256_movemask_ps(finite) & 0x77) == 0x77) {
-        out.points += 2;
-      } else {
-        const __m256 keep =
-            _mm256_and_ps(_mm256_and_ps(finite, _mm256_permute_ps(finite, kRotate)),
-                          _mm256_and_ps(_mm256_permute_ps(finite, _MM_SHUFFLE(3, 1, 0, 2)), xyz));
-        d = _mm256_and_ps(d, keep);
-        out.points += static_cast<std::size_t>(__builtin_popcount(_mm256_movemask_ps(keep)) / 3);
-      }
-      sum = _mm256_add_ps(sum, d);
-      squares = _mm256_add_ps(squares, _mm256_mul_ps(d, d));
-      cross = _mm256_add_ps(cross, _mm256_mul_ps(d, _mm256_permute_ps(d, kRotate)));
+  std::size_t counted = 0, k = 0;  // counted in a register, not in `out`
+  for (; k + 2 * kFlushPoints <= n; k += 2 * kFlushPoints) {
+    BlockLanes first{zero, zero, zero}, second{zero, zero, zero};
+    for (std::size_t j = k; j < k + kFlushPoints; j += 2) {
+      counted += addPair(first, at(j), at(j + 1), origin);
+      counted += addPair(second, at(j + kFlushPoints), at(j + kFlushPoints + 1), origin);
     }
-    alignas(32) float lanes[3][8];
-    _mm256_store_ps(lanes[0], sum);
-    _mm256_store_ps(lanes[1], squares);
-    _mm256_store_ps(lanes[2], cross);
-    addLanePairs(out.sum, lanes[0], lanes[0] + 4);
-    addLanePairs(out.squares, lanes[1], lanes[1] + 4);
-    addLanePairs(out.cross, lanes[2], lanes[2] + 4);
+    flushBlock(out, first);
+    flushBlock(out, second);
   }
+  while (k < n) {
+    BlockLanes lanes{zero, zero, zero};
+    for (const std::size_t stop = std::min(n, k + kFlushPoints); k < stop; k += 2)
+      counted += addPair(lanes, at(k), k + 1 < stop ? at(k + 1) : none, origin);
+    flushBlock(out, lanes);
+  }
+  out.points = counted;
   return out;
 }
 
