@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <type_traits>
 
 namespace multislit {
 
@@ -166,20 +165,40 @@ __attribute__((target("avx2"))) int firstMaxAvx2(const std::uint8_t* p, int n) {
   }
 }
 
+/// firstMax() of n >= 16 16-bit pixels with AVX2, 16 per instruction; the last load overlaps the
+/// one before it.
+__attribute__((target("avx2"))) int firstMaxAvx2(const std::uint16_t* p, int n) {
+  const auto* blocks = reinterpret_cast<const __m256i*>(p);  // loads of 16 pixels from p + i
+  __m256i m = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + n - 16));
+  for (int i = 0; i + 16 < n; i += 16) m = _mm256_max_epu16(m, _mm256_loadu_si256(blocks + i / 16));
+  __m128i h = _mm_max_epu16(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
+  h = _mm_max_epu16(h, _mm_srli_si128(h, 8));
+  h = _mm_max_epu16(h, _mm_srli_si128(h, 4));
+  h = _mm_max_epu16(h, _mm_srli_si128(h, 2));
+  const __m256i best = _mm256_set1_epi16(static_cast<short>(_mm_extract_epi16(h, 0)));
+  for (int i = 0;; i += 16) {
+    const int at = std::min(i, n - 16);
+    const __m256i pixels = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + at));
+    const auto hits = static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi16(pixels, best)));
+    if (hits != 0) return at + __builtin_ctz(hits) / 2;
+  }
+}
+
 }  // namespace
+
+// 16-bit rows: 16 pixels per instruction with AVX2, else the generic loop.
+template <>
+int firstMax<std::uint16_t>(const std::uint16_t* p, int n) {
+  if (n >= 16 && hasAvx2()) return firstMaxAvx2(p, n);
+  return firstMaxPlain(p, n);
+}
 
 // 8-bit rows (the usual camera format): 32 pixels per instruction with AVX2, else 16. The loads
 // stay inside [p, p + n): the last block overlaps the one before it.
 template <>
 int firstMax<std::uint8_t>(const std::uint8_t* p, int n) {
   if (n >= 32 && hasAvx2()) return firstMaxAvx2(p, n);
-  if (n < 16) {
-    std::uint8_t best = p[0];
-    for (int i = 1; i < n; ++i) best = std::max(best, p[i]);
-    int i = 0;
-    while (p[i] != best) ++i;
-    return i;
-  }
+  if (n < 16) return firstMaxPlain(p, n);
   const auto load = [p](int i) { return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + i)); };
   __m128i m = load(n - 16);
   for (int i = 0; i + 16 < n; i += 16) m = _mm_max_epu8(m, load(i));
@@ -248,10 +267,8 @@ void measurePeaks(const PeakRegion<T>* regions, std::size_t count, int columns,
   if (params.estimator == Estimator::Gaussian && hasAvx2()) {
     std::size_t lanes = 4;
     auto measure = measureFour<T>;
-    if constexpr (std::is_same_v<T, std::uint8_t>) {
-      if (hasAvx2Fma() && params.half_window <= kEightMaxHalfWindow)
-        lanes = 8, measure = measureEight;
-    }
+    if (hasAvx2Fma() && params.half_window <= kEightMaxHalfWindow)
+      lanes = 8, measure = measureEight<T>;
     for (std::size_t i = 0; i < count; i += lanes)
       measure(regions + i, static_cast<int>(std::min(lanes, count - i)), columns, params, peaks + i,
               found + i);

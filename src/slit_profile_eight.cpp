@@ -1,5 +1,5 @@
-// Eight 8-bit slit profiles at a time, in float lanes of AVX2 and FMA (chosen at run time):
-// measureEight() for measurePeaks().
+// Eight slit profiles (8- or 16-bit) at a time, in float lanes of AVX2 and FMA (chosen at run
+// time): measureEight() for measurePeaks().
 #include "slit_profile_simd.h"
 
 #include <cstdint>
@@ -9,21 +9,29 @@
 namespace multislit::profile {
 namespace {
 
-// Eight 8-bit profiles at a time, in float lanes of AVX2 and FMA: about five times faster than
-// four in double, as each vector holds twice the profiles and the logarithm needs no division.
-// Results differ from measurePeakAt() by float rounding only (the test bounds it).
+// Eight profiles at a time, in float lanes of AVX2 and FMA: about five times faster than four in
+// double, as each vector holds twice the profiles and the logarithm needs no division. Results
+// differ from measurePeakAt() by float rounding only (the tests bound it, for 8 and 16 bits).
+
+/// Pixels in a 32-byte block of a row.
+template <typename T>
+constexpr int kBlockPixels = 32 / static_cast<int>(sizeof(T));
 
 /// The 32-byte blocks that hold the 2 hw + 7 pixels of a profile and its flanks.
-constexpr int blocksOf(int hw) { return (2 * hw + 7 + 31) / 32; }
+template <typename T>
+constexpr int blocksOf(int hw) {
+  return (2 * hw + 7 + kBlockPixels<T> - 1) / kBlockPixels<T>;
+}
 
 /// Pixels of the window of the widest half window: 2 kEightMaxHalfWindow + 1.
 constexpr int kEightWindow = 2 * kEightMaxHalfWindow + 1;
 
-/// ln(v) of eight normal floats v > 0, within 4e-7 for v below 256: v = 2^e m with m in [sqrt(1/2),
-/// sqrt(2)), ln v = e ln 2 + ln(1 + f), f = m - 1, and ln(1 + f) = f + f^2 q(f) with q the degree-6
-/// Chebyshev interpolant of (ln(1 + f) - f) / f^2 on that interval (its error: 1.2e-7). e comes
-/// from the bits of v less those of sqrt(1/2), whose borrow picks the interval, and q is summed
-/// in pairs of terms (Estrin), a chain of four operations instead of Horner's six.
+/// ln(v) of eight normal floats v > 0, within 4e-7 for v below 256 and 1e-6 below 65536: v = 2^e m
+/// with m in [sqrt(1/2), sqrt(2)), ln v = e ln 2 + ln(1 + f), f = m - 1, and ln(1 + f) = f + f^2
+/// q(f) with q the degree-6 Chebyshev interpolant of (ln(1 + f) - f) / f^2 on that interval (its
+/// error: 1.2e-7). e comes from the bits of v less those of sqrt(1/2), whose borrow picks the
+/// interval, and q is summed in pairs of terms (Estrin), a chain of four operations instead of
+/// Horner's six.
 inline __attribute__((target("avx2,fma"), always_inline)) __m256 logEight(__m256 v) {
   const __m256i bits = _mm256_castps_si256(v);
   const __m256i e = _mm256_srai_epi32(_mm256_sub_epi32(bits, _mm256_set1_epi32(0x3f3504f3)), 23);
@@ -93,8 +101,54 @@ inline __attribute__((target("avx2"), always_inline)) __m256 columnOf(const std:
   return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
 }
 
+/// The 16 pixels at each of p[0..7], transposed: column c of the eight rows (p[0][c] .. p[7][c])
+/// lands at out[columnAt16(c)] as eight 16-bit pixels (256 bytes). Three rounds of interleaving
+/// within the 128-bit halves, the high half doing columns 8..15 as the low half does 0..7.
+inline __attribute__((target("avx2"), always_inline)) void transposeEight(
+    const std::uint16_t* const p[8], std::uint8_t* out) {
+  __m256i r[8], a[8], b[8];
+  for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p[l]));
+  for (int k = 0; k < 4; ++k) {  // a[2k]: columns 0..3 of rows 2k, 2k + 1; a[2k + 1]: 4..7
+    a[2 * k] = _mm256_unpacklo_epi16(r[2 * k], r[2 * k + 1]);
+    a[2 * k + 1] = _mm256_unpackhi_epi16(r[2 * k], r[2 * k + 1]);
+  }
+  for (int k = 0; k < 2; ++k) {  // b[4k + j]: columns 2j, 2j + 1 of rows 4k .. 4k + 3
+    b[4 * k] = _mm256_unpacklo_epi32(a[4 * k], a[4 * k + 2]);
+    b[4 * k + 1] = _mm256_unpackhi_epi32(a[4 * k], a[4 * k + 2]);
+    b[4 * k + 2] = _mm256_unpacklo_epi32(a[4 * k + 1], a[4 * k + 3]);
+    b[4 * k + 3] = _mm256_unpackhi_epi32(a[4 * k + 1], a[4 * k + 3]);
+  }
+  for (int j = 0; j < 4; ++j) {  // columns 2j and 2j + 1 of all rows
+    _mm256_store_si256(reinterpret_cast<__m256i*>(out + 64 * j),
+                       _mm256_unpacklo_epi64(b[j], b[4 + j]));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(out + 64 * j + 32),
+                       _mm256_unpackhi_epi64(b[j], b[4 + j]));
+  }
+}
+
+/// Where the 16-bit transposeEight() puts column c: its block of 16 columns c / 16 (one call
+/// each), the store c % 8, its half (c % 16) / 8.
+constexpr int columnAt16(int c) { return 256 * (c / 16) + 32 * (c % 8) + 16 * ((c % 16) / 8); }
+
+/// Column c of the 16-bit transposeEight()'s output as eight floats.
+inline __attribute__((target("avx2"), always_inline)) __m256 columnOf16(const std::uint8_t* columns,
+                                                                        int c) {
+  const __m128i pixels = _mm_load_si128(reinterpret_cast<const __m128i*>(columns + columnAt16(c)));
+  return _mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(pixels));
+}
+
+/// Column c of the transposed pixels of T as eight floats.
+template <typename T>
+inline __attribute__((target("avx2"), always_inline)) __m256 columnOfT(const std::uint8_t* columns,
+                                                                       int c) {
+  if constexpr (sizeof(T) == 1)
+    return columnOf(columns, c);
+  else
+    return columnOf16(columns, c);
+}
+
 /// The profiles of eight lanes around their maxima `tops` (not saturated; pixels top - hw - 3 to
-/// top - hw - 4 + 32 blocksOf(hw) inside the row): background, contrast and width as
+/// top - hw - 4 + kBlockPixels blocksOf(hw) inside the row): background, contrast and width as
 /// measurePeakAt(), and the centre of Caruana's fit as gaussianCentre() (NaN where the fit does not
 /// hold).
 struct EightProfiles {
@@ -103,15 +157,17 @@ struct EightProfiles {
   alignas(32) double centre[8];
 };
 
-/// eightProfiles() step 1: the blocksOf(hw) blocks of 32 pixels of each lane from top - hw - 3 on,
+/// eightProfiles() step 1: the blocksOf(hw) blocks of 32 bytes of each lane from top - hw - 3 on,
 /// transposed by transposeEight() into columns (256 bytes a block).
-inline __attribute__((target("avx2"), always_inline)) void transposeLanes(
-    const std::uint8_t* const rows[8], const int tops[8], int hw, std::uint8_t* columns) {
-  const std::uint8_t* starts[8];
+template <typename T>
+inline __attribute__((target("avx2"), always_inline)) void transposeLanes(const T* const rows[8],
+                                                                          const int tops[8], int hw,
+                                                                          std::uint8_t* columns) {
+  const T* starts[8];
   for (int l = 0; l < 8; ++l) starts[l] = rows[l] + tops[l] - hw - 3;
-  for (int block = 0; block < blocksOf(hw); ++block) {
+  for (int block = 0; block < blocksOf<T>(hw); ++block) {
     transposeEight(starts, columns + 256 * block);
-    for (const std::uint8_t*& start : starts) start += 32;
+    for (const T*& start : starts) start += kBlockPixels<T>;
   }
 }
 
@@ -122,18 +178,19 @@ struct EightLine {
 };
 
 /// eightProfiles() step 2: EightLine from the transposed columns.
+template <typename T>
 inline __attribute__((target("avx2,fma"), always_inline)) EightLine eightLine(
     const std::uint8_t* columns, int hw, const ProfileParams& p) {
   // Column c is pixel top + c - hw - 3: the left flank is c = 0..2, the window c = 3..2 hw + 3
   // (d = x - top from -hw to hw), the right flank c = 2 hw + 4..2 hw + 6.
   const __m256 at_left =
-      (columnOf(columns, 0) + columnOf(columns, 1) + columnOf(columns, 2)) / 3.0f;
-  const __m256 right = (columnOf(columns, 2 * hw + 4) + columnOf(columns, 2 * hw + 5) +
-                        columnOf(columns, 2 * hw + 6)) /
+      (columnOfT<T>(columns, 0) + columnOfT<T>(columns, 1) + columnOfT<T>(columns, 2)) / 3.0f;
+  const __m256 right = (columnOfT<T>(columns, 2 * hw + 4) + columnOfT<T>(columns, 2 * hw + 5) +
+                        columnOfT<T>(columns, 2 * hw + 6)) /
                        3.0f;
   const __m256 slope = (right - at_left) / static_cast<float>(2 * hw + 4);
   const __m256 at_top = _mm256_fmadd_ps(slope, _mm256_set1_ps(static_cast<float>(hw + 2)), at_left);
-  const __m256 contrast = columnOf(columns, hw + 3) - at_top;
+  const __m256 contrast = columnOfT<T>(columns, hw + 3) - at_top;
   const __m256 tie = _mm256_set1_ps(static_cast<float>(kTieBreak));
   const __m256 half = 0.5f * contrast + tie,
                floor = static_cast<float>(p.fit_threshold) * contrast + tie;
@@ -149,6 +206,7 @@ struct EightWidths {
 
 /// eightProfiles() step 3: the background-free values of the window's pixels j = d + hw into
 /// values[j], and EightWidths.
+template <typename T>
 inline __attribute__((target("avx2,fma"), always_inline)) EightWidths eightValues(
     const std::uint8_t* columns, int hw, const EightLine& line, float (*values)[8]) {
   const __m256 at_top = line.at_top, slope = line.slope, half = line.half, floor = line.floor;
@@ -156,7 +214,7 @@ inline __attribute__((target("avx2,fma"), always_inline)) EightWidths eightValue
   std::uint64_t some_in = 0;
   __m256 bg = _mm256_fnmadd_ps(slope, _mm256_set1_ps(static_cast<float>(hw)), at_top);  // at -hw
   for (int j = 0; j <= 2 * hw; ++j, bg += slope) {
-    const __m256 v = columnOf(columns, j + 3) - bg;
+    const __m256 v = columnOfT<T>(columns, j + 3) - bg;
     width = _mm256_sub_epi32(width, _mm256_castps_si256(_mm256_cmp_ps(v, half, _CMP_GT_OQ)));
     const __m256 in = _mm256_cmp_ps(v, floor, _CMP_GT_OQ);
     used = _mm256_sub_epi32(used, _mm256_castps_si256(in));
@@ -245,19 +303,20 @@ inline __attribute__((target("avx2,fma"), always_inline)) void eightCentres(cons
   }
 }
 
-__attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8_t* const rows[8],
+template <typename T>
+__attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const T* const rows[8],
                                                                 const int tops[8],
                                                                 const ProfileParams& p) {
   const int hw = p.half_window;
-  alignas(32) std::uint8_t columns[256 * blocksOf(kEightMaxHalfWindow)];
+  alignas(32) std::uint8_t columns[256 * blocksOf<T>(kEightMaxHalfWindow)];
   transposeLanes(rows, tops, hw, columns);
-  const EightLine line = eightLine(columns, hw, p);
+  const EightLine line = eightLine<T>(columns, hw, p);
   // Three passes over the window, none with a branch or a chain from one pixel to the next but
   // the sums, so that the core overlaps the pixels: the background-free values and the lanes'
   // widths; over the pixels where some lane is in the fit, the weights and the logarithms; the
   // sums of the fit.
   alignas(32) float values[kEightWindow][8];
-  const EightWidths widths = eightValues(columns, hw, line, values);
+  const EightWidths widths = eightValues<T>(columns, hw, line, values);
   const EightSums sums = eightSums(values, hw, widths.some_in, line.floor);
   EightProfiles out;
   _mm256_store_ps(out.contrast, line.contrast);
@@ -270,14 +329,17 @@ __attribute__((target("avx2,fma"))) EightProfiles eightProfiles(const std::uint8
 
 }  // namespace
 
-void measureEight(const PeakRegion<std::uint8_t>* regions, int count, int columns,
-                  const ProfileParams& p, Peak* peaks, bool* found) {
-  const std::uint8_t* rows[8];
+template <typename T>
+void measureEight(const PeakRegion<T>* regions, int count, int columns, const ProfileParams& p,
+                  Peak* peaks, bool* found) {
+  const T* rows[8];
   int tops[8], slots[8];
   const int hw = p.half_window;
   const int lanes = fillLanes(
       regions, count, columns, p,
-      [&](int x) { return x - hw - 3 >= 0 && x - hw - 4 + 32 * blocksOf(hw) <= columns - 1; },
+      [&](int x) {
+        return x - hw - 3 >= 0 && x - hw - 4 + kBlockPixels<T> * blocksOf<T>(hw) <= columns - 1;
+      },
       peaks, found, rows, tops, slots);
   if (lanes == 0) return;
   const EightProfiles f = eightProfiles(rows, tops, p);
@@ -290,6 +352,11 @@ void measureEight(const PeakRegion<std::uint8_t>* regions, int count, int column
                                  &peaks[slots[l]]);
   }
 }
+
+template void measureEight<std::uint8_t>(const PeakRegion<std::uint8_t>*, int, int,
+                                         const ProfileParams&, Peak*, bool*);
+template void measureEight<std::uint16_t>(const PeakRegion<std::uint16_t>*, int, int,
+                                          const ProfileParams&, Peak*, bool*);
 
 }  // namespace multislit::profile
 #endif

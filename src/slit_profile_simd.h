@@ -1,7 +1,7 @@
 // The private parts of the slit-profile measure (private to the core library), shared by
 // src/slit_profile.cpp (the scalar measure, its estimators and measurePeaks()),
 // src/slit_profile_four.cpp (four profiles at a time in double lanes of AVX2) and
-// src/slit_profile_eight.cpp (eight 8-bit profiles at a time in float lanes of AVX2 and FMA).
+// src/slit_profile_eight.cpp (eight profiles at a time in float lanes of AVX2 and FMA).
 #pragma once
 
 #include "multislit/slit_profile.h"
@@ -88,14 +88,20 @@ inline CramerScalar solveByCramer(double s0, double s1, double s2, double s3, do
       m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)};
 }
 
-/// Index of the first largest of the n > 0 values at p (std::max_element).
+/// Index of the first largest of the n > 0 values at p (std::max_element), without intrinsics.
 template <typename T>
-int firstMax(const T* p, int n) {
+int firstMaxPlain(const T* p, int n) {
   T best = p[0];
   for (int i = 1; i < n; ++i) best = std::max(best, p[i]);  // vectorizes: no branch
   int i = 0;
   while (p[i] != best) ++i;
   return i;
+}
+
+/// Index of the first largest of the n > 0 values at p (std::max_element).
+template <typename T>
+int firstMax(const T* p, int n) {
+  return firstMaxPlain(p, n);
 }
 
 #if defined(MULTISLIT_X86)
@@ -107,6 +113,9 @@ inline __attribute__((target("avx2"), always_inline)) __m256i loadBytes(const st
 // (slit_profile.cpp).
 template <>
 int firstMax<std::uint8_t>(const std::uint8_t* p, int n);
+// 16-bit rows: 16 pixels per instruction with AVX2 (slit_profile.cpp).
+template <>
+int firstMax<std::uint16_t>(const std::uint16_t* p, int n);
 
 /// Caruana's normal equations [s0 s1 s2; s1 s2 s3; s2 s3 s4] (a b c) = (r0 r1 r2) in four lanes,
 /// by Cramer's rule as gaussianCentre(): b = nb / det, c = nc / det.
@@ -174,8 +183,9 @@ bool finishLane(const T* row, int top, const ProfileParams& p, const Background&
   return true;
 }
 
-/// Widest half window eightProfiles() takes: two 32-byte loads hold a profile's 2 hw + 1 pixels
-/// and its two 3-pixel flanks (one load up to hw = 12, the paper's sensor).
+/// Widest half window eightProfiles() takes: two 32-byte loads hold an 8-bit profile's 2 hw + 1
+/// pixels and its two 3-pixel flanks (one load up to hw = 12, the paper's sensor), four loads a
+/// 16-bit one.
 constexpr int kEightMaxHalfWindow = 28;
 
 /// Four profiles at a time, one per lane of AVX2 doubles, bit for bit as measurePeak()
@@ -184,9 +194,11 @@ template <typename T>
 void measureFour(const PeakRegion<T>* regions, int count, int columns, const ProfileParams& p,
                  Peak* peaks, bool* found);
 
-/// Eight 8-bit profiles at a time in float lanes of AVX2 and FMA (slit_profile_eight.cpp).
-void measureEight(const PeakRegion<std::uint8_t>* regions, int count, int columns,
-                  const ProfileParams& p, Peak* peaks, bool* found);
+/// Eight profiles at a time in float lanes of AVX2 and FMA (slit_profile_eight.cpp; instantiated
+/// for 8- and 16-bit rows).
+template <typename T>
+void measureEight(const PeakRegion<T>* regions, int count, int columns, const ProfileParams& p,
+                  Peak* peaks, bool* found);
 #endif
 
 }  // namespace multislit::profile

@@ -1,5 +1,6 @@
 // Bit depths: 16-bit images measure as 8-bit ones, and 12-bit data in 16-bit images (values up
 // to 4095) measures with its full scale, which the calibration keeps.
+#include "batched_profiles.h"
 #include "extraction_errors.h"
 #include "multislit/extractor.h"
 #include "multislit/sim/scenarios.h"
@@ -48,6 +49,25 @@ void expectMeasuredAsTheTruth(const Extractor& ex, const cv::Mat& image,
 }
 
 }  // namespace
+
+// 16-bit profiles, eight at a time in float lanes where the CPU has AVX2 and FMA, against the
+// measure one by one in double: floats hold every 16-bit pixel exactly, and the same profiles are
+// found and placed within float rounding, at the extractor's window and wider ones.
+TEST(Extractor, SixteenBitBatchedProfilesMatchTheScalarMeasure) {
+  const Reference ref = Reference::fromImage(referenceImage16());
+  ProfileParams p = Extractor(ref).profileParams(CV_16U);
+  BatchedAgreement agreement;
+  const Simulator& sim16 = simulator16();
+  const RenderedFrame frames[] = {renderScenario(makeScenario("cond3"), 4, sim16),
+                                  renderScenario(makeScenario("cable"), 60, sim16)};
+  for (const int half_window : {p.half_window, 13, 20})
+    for (const RenderedFrame& f : frames) {
+      ASSERT_EQ(f.image.type(), CV_16UC1);
+      p.half_window = half_window;
+      addBatchedAgreement<std::uint16_t>(ref, f.image, p, agreement);
+    }
+  expectBatchedAgreement(agreement);
+}
 
 TEST(Extractor, SixteenBitImagesMeasureAsWell) {
   const Simulator& sim16 = simulator16();

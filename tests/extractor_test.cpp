@@ -1,5 +1,6 @@
 // From simulated images to RDMaps, measured against the simulator's ground truth.
 #include "multislit/extractor.h"
+#include "batched_profiles.h"
 #include "extraction_errors.h"
 #include "multislit/sim/photometry.h"
 #include "multislit/sim/scenarios.h"
@@ -295,8 +296,7 @@ TEST(Extractor, AProfileCutByTheImageEdgeIsMeasuredInsideTheImage) {
 TEST(Extractor, BatchedProfilesMatchTheScalarMeasure) {
   const Reference& ref = reference();
   ProfileParams p = Extractor(ref).profileParams(CV_8U);
-  std::size_t regions_seen = 0, found = 0, differ = 0;
-  double worst = 0;
+  BatchedAgreement agreement;
   const RenderedFrame frames[] = {renderScenario(makeScenario("cond3"), 4),
                                   renderScenario(makeScenario("cable"), 60)};
   // The window of the extractor (12 px each side: one 32-byte load per profile), and wider ones
@@ -305,37 +305,9 @@ TEST(Extractor, BatchedProfilesMatchTheScalarMeasure) {
   for (const int half_window : {p.half_window, 13, 20})
     for (const RenderedFrame& f : frames) {
       p.half_window = half_window;
-      std::vector<PeakRegion<std::uint8_t>> regions;
-      for (const ReferenceSlit& slit : ref.slits)
-        for (std::size_t k = 0; k < slit.u.size(); ++k) {
-          if (!std::isfinite(slit.u[k])) continue;
-          const double half = 0.5 * ref.region_width;
-          regions.push_back({f.image.ptr<std::uint8_t>(slit.first_row + static_cast<int>(k)),
-                             static_cast<int>(std::ceil(slit.u[k] - half)),
-                             static_cast<int>(std::floor(slit.u[k] + half))});
-        }
-      std::vector<Peak> peaks(regions.size());
-      std::unique_ptr<bool[]> batched(new bool[regions.size()]);
-      measurePeaks(regions.data(), regions.size(), f.image.cols, p, peaks.data(), batched.get());
-      for (std::size_t i = 0; i < regions.size(); ++i) {
-        Peak one;
-        const bool alone =
-            measurePeak(regions[i].row, f.image.cols, regions[i].first, regions[i].last, p, &one);
-        ++regions_seen;
-        differ += alone != batched[i];
-        if (!alone || !batched[i]) continue;
-        ++found;
-        worst = std::max(worst, std::abs(one.centre - peaks[i].centre));
-        EXPECT_NEAR(one.contrast, peaks[i].contrast, 1e-3 * one.contrast);
-      }
+      addBatchedAgreement<std::uint8_t>(ref, f.image, p, agreement);
     }
-  std::printf(
-      "%zu regions: %zu profiles found by both, %zu found by one only; largest centre "
-      "difference %.2e px\n",
-      regions_seen, found, differ, worst);
-  EXPECT_GT(found, regions_seen * 9 / 10);
-  EXPECT_EQ(differ, 0u);
-  EXPECT_LT(worst, 1e-3);
+  expectBatchedAgreement(agreement);
 }
 
 // Absolute scale from a wall at known distances, as with a tape measure.
