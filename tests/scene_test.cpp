@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -186,6 +187,30 @@ TEST(Scene, SurfacePhotometryRoundTripsThroughYaml) {
   s.scene.objects[0].stripe_width = 9;
   EXPECT_THROW(s.scene.validate(), std::invalid_argument);
   std::filesystem::remove(path);
+}
+
+// The renderer keeps the glare as a float, computed mostly without std::pow: it must be the same
+// float as floorGlare()'s, everywhere, also where the lamp's image is faint (c^40 tiny) or nearly
+// on a float's rounding boundary.
+TEST(Scene, GlareAsFloatIsTheGlareConverted) {
+  Scene scene;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> x(-1.0, 2.5), y(-1.5, 1.5), height(0.05, 1.0);
+  std::size_t lit = 0, faint = 0;
+  for (const double gloss : {0.3, 1.0, 1.7, 2.0}) {
+    scene.floor.gloss = gloss;
+    for (int k = 0; k < 250000; ++k) {
+      const Eigen::Vector3d point(x(rng), y(rng), 0), camera(x(rng), y(rng), height(rng));
+      const Eigen::Vector3d ray = (point - camera).normalized();
+      const double glare = scene.floorGlare(point, ray);
+      ASSERT_EQ(scene.floorGlareAsFloat(point, ray), static_cast<float>(glare))
+          << "gloss " << gloss << " point " << point.transpose() << " ray " << ray.transpose();
+      lit += glare > 0;
+      faint += glare > 0 && glare < 1e-30;
+    }
+  }
+  EXPECT_GT(lit, 100000u);
+  EXPECT_GT(faint, 100u);
 }
 
 namespace {

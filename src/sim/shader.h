@@ -83,7 +83,7 @@ struct Shader {
   /// The glare part of surface().
   void glare(Sample& s, const Eigen::Vector3d& point_w, const Eigen::Vector3d& ray_w) const {
     if (s.object == 0 && scene.floor.gloss > 0)
-      s.glare = static_cast<float>(scene.floorGlare(point_w, ray_w.normalized()));
+      s.glare = scene.floorGlareAsFloat(point_w, ray_w.normalized());
   }
   void illuminate(Sample& s, const Eigen::Vector2d& xy, const Eigen::Vector3d& normal,
                   const Eigen::Vector3d& point_w, double reach) const {

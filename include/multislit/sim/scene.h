@@ -94,6 +94,9 @@ class Scene {
   /// Ambient glare seen along the unit world ray `ray` where it meets the floor at `point`,
   /// relative to the ambient light on albedo 1: a ceiling lamp's mirror image (0 without gloss).
   double floorGlare(const Eigen::Vector3d& point, const Eigen::Vector3d& ray) const;
+  /// floorGlare() as a float, the same bits as converting it, mostly without std::pow: what the
+  /// renderer keeps per pixel.
+  float floorGlareAsFloat(const Eigen::Vector3d& point, const Eigen::Vector3d& ray) const;
   /// "floor", the object's name, or "none".
   std::string objectName(int object) const;
 
