@@ -2,6 +2,7 @@
 #include "image_noise.h"
 
 #include "avx2_clones.h"
+#include "gamma_levels.h"
 #include "normal_rows.h"
 #include "parallel_rows.h"
 
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace multislit {
 namespace {
@@ -130,6 +132,9 @@ cv::Mat exposeSensor(const cv::Mat& sharp, const RenderConfig& render, uint64_t 
   cv::Mat image(irradiance.rows, irradiance.cols, render.bit_depth == 8 ? CV_8U : CV_16U);
   const auto per_electron = static_cast<float>(1.0 / render.full_well),
              read_variance = static_cast<float>(render.read_noise * render.read_noise);
+  // The gamma (before quantizing) by the least value of each level, not a std::pow per pixel.
+  const std::shared_ptr<const GammaLevels> levels =
+      render.gamma != 1.0 ? GammaLevels::cached(render.gamma, full) : nullptr;
   parallelRows(irradiance.rows, [&](const cv::Range& rows) {
     std::vector<float> value(static_cast<std::size_t>(irradiance.cols)), z(value.size());
     for (int r = rows.start; r < rows.end; ++r) {
@@ -138,10 +143,12 @@ cv::Mat exposeSensor(const cv::Mat& sharp, const RenderConfig& render, uint64_t 
                   irradiance.cols);
       addSensorNoise(irradiance.ptr<float>(r), render.noise ? z.data() : nullptr, value.data(),
                      irradiance.cols, per_electron, read_variance);
-      if (render.gamma != 1.0)
-        for (float& v : value) v = static_cast<float>(std::pow(v, 1.0 / render.gamma));
       // Rounded to the nearest DN: value is in [0, 1].
-      if (render.bit_depth == 8)
+      if (levels && render.bit_depth == 8)
+        levels->quantize(value.data(), image.ptr<uint8_t>(r), irradiance.cols);
+      else if (levels)
+        levels->quantize(value.data(), image.ptr<uint16_t>(r), irradiance.cols);
+      else if (render.bit_depth == 8)
         quantize(value.data(), full, image.ptr<uint8_t>(r), irradiance.cols);
       else
         quantize(value.data(), full, image.ptr<uint16_t>(r), irradiance.cols);
