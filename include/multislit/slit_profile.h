@@ -54,10 +54,10 @@ struct PeakRegion {
 
 /// measurePeak() of `count` regions of rows `columns` wide: found[i] and peaks[i] are what
 /// measurePeak(regions[i].row, columns, regions[i].first, regions[i].last, ...) returns and
-/// measures. Faster: with the Gaussian estimator, CPUs with AVX2 and FMA measure eight 8-bit
-/// profiles at a time in float (the same profiles found, centres within float rounding: 6e-6 px
-/// on rendered frames); otherwise (16-bit images, profiles wider than 57 px, no FMA) AVX2 measures
-/// four at a time in double, bit for bit.
+/// measures. Faster: with the Gaussian estimator, CPUs with AVX2 and FMA measure eight profiles
+/// (8- or 16-bit) at a time in float (the same profiles found, centres within float rounding:
+/// 8e-6 px at 8 bits, 1.6e-5 px at 16, on rendered frames); otherwise (profiles wider than 57 px,
+/// no FMA) AVX2 measures four at a time in double, bit for bit.
 template <typename T>
 void measurePeaks(const PeakRegion<T>* regions, std::size_t count, int columns,
                   const ProfileParams& params, Peak* peaks, bool* found);
