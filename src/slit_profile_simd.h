@@ -184,8 +184,8 @@ bool finishLane(const T* row, int top, const ProfileParams& p, const Background&
 }
 
 /// Widest half window eightProfiles() takes: two 32-byte loads hold an 8-bit profile's 2 hw + 1
-/// pixels and its two 3-pixel flanks (one load up to hw = 12, the paper's sensor), four loads a
-/// 16-bit one.
+/// pixels and its two 3-pixel flanks (one load up to hw = 12, the paper's sensor), four a 16-bit
+/// one (two up to hw = 12).
 constexpr int kEightMaxHalfWindow = 28;
 
 /// Four profiles at a time, one per lane of AVX2 doubles, bit for bit as measurePeak()
