@@ -168,9 +168,8 @@ __attribute__((target("avx2"))) int firstMaxAvx2(const std::uint8_t* p, int n) {
 /// firstMax() of n >= 16 16-bit pixels with AVX2, 16 per instruction; the last load overlaps the
 /// one before it.
 __attribute__((target("avx2"))) int firstMaxAvx2(const std::uint16_t* p, int n) {
-  const auto* blocks = reinterpret_cast<const __m256i*>(p);  // loads of 16 pixels from p + i
-  __m256i m = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + n - 16));
-  for (int i = 0; i + 16 < n; i += 16) m = _mm256_max_epu16(m, _mm256_loadu_si256(blocks + i / 16));
+  __m256i m = loadBytes(p + n - 16);
+  for (int i = 0; i + 16 < n; i += 16) m = _mm256_max_epu16(m, loadBytes(p + i));
   __m128i h = _mm_max_epu16(_mm256_castsi256_si128(m), _mm256_extracti128_si256(m, 1));
   h = _mm_max_epu16(h, _mm_srli_si128(h, 8));
   h = _mm_max_epu16(h, _mm_srli_si128(h, 4));
@@ -178,8 +177,8 @@ __attribute__((target("avx2"))) int firstMaxAvx2(const std::uint16_t* p, int n) 
   const __m256i best = _mm256_set1_epi16(static_cast<short>(_mm_extract_epi16(h, 0)));
   for (int i = 0;; i += 16) {
     const int at = std::min(i, n - 16);
-    const __m256i pixels = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + at));
-    const auto hits = static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi16(pixels, best)));
+    const auto hits =
+        static_cast<unsigned>(_mm256_movemask_epi8(_mm256_cmpeq_epi16(loadBytes(p + at), best)));
     if (hits != 0) return at + __builtin_ctz(hits) / 2;
   }
 }

@@ -107,7 +107,7 @@ inline __attribute__((target("avx2"), always_inline)) __m256 columnOf(const std:
 inline __attribute__((target("avx2"), always_inline)) void transposeEight(
     const std::uint16_t* const p[8], std::uint8_t* out) {
   __m256i r[8], a[8], b[8];
-  for (int l = 0; l < 8; ++l) r[l] = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p[l]));
+  for (int l = 0; l < 8; ++l) r[l] = loadBytes(p[l]);
   for (int k = 0; k < 4; ++k) {  // a[2k]: columns 0..3 of rows 2k, 2k + 1; a[2k + 1]: 4..7
     a[2 * k] = _mm256_unpacklo_epi16(r[2 * k], r[2 * k + 1]);
     a[2 * k + 1] = _mm256_unpackhi_epi16(r[2 * k], r[2 * k + 1]);

@@ -105,7 +105,11 @@ int firstMax(const T* p, int n) {
 }
 
 #if defined(MULTISLIT_X86)
+/// The 32 bytes at p: 32 8-bit or 16 16-bit pixels.
 inline __attribute__((target("avx2"), always_inline)) __m256i loadBytes(const std::uint8_t* p) {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+inline __attribute__((target("avx2"), always_inline)) __m256i loadBytes(const std::uint16_t* p) {
   return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
 }
 

@@ -71,7 +71,7 @@ float GammaLevels::leastOf(int level) const {
   // halved: the floats in [0, 1] are ordered as their bits.
   const std::uint32_t one = bitsOf(1.0f);
   const double edge = std::pow((level - 0.5) / full_, 1.0 / exponent_);
-  std::uint32_t lo = std::min(bitsOf(static_cast<float>(std::min(edge, 1.0))), one), hi = lo;
+  std::uint32_t lo = bitsOf(static_cast<float>(std::min(edge, 1.0))), hi = lo;
   for (std::uint32_t step = 8; lo > 0 && exact(floatOf(lo)) >= level; step *= 4)
     lo = lo > step ? lo - step : 0;
   for (std::uint32_t step = 8; hi < one && exact(floatOf(hi)) < level; step *= 4)

@@ -257,7 +257,7 @@ float Scene::floorGlareAsFloat(const Eigen::Vector3d& point, const Eigen::Vector
   // c^40 by six products has a relative error below 40 x 2^-53 (c >= 2^-20: every power is a
   // normal double), and std::pow below one ulp, so the two products with the gloss differ by less
   // than 1e-14 of either. Where no float's rounding boundary lies within kSettled of the fast one,
-  // both round to the same float; elsewhere (one in 10^5) std::pow decides.
+  // both round to the same float; elsewhere (one in 10^5) floorGlare() decides.
   static_assert(kGlossExponent == 40.0, "the six products make c^40");
   constexpr double kSettled = 1e-12;
   if (c >= 0x1p-20) {
@@ -266,7 +266,7 @@ float Scene::floorGlareAsFloat(const Eigen::Vector3d& point, const Eigen::Vector
     if (static_cast<float>(glare * (1 - kSettled)) == static_cast<float>(glare * (1 + kSettled)))
       return static_cast<float>(glare);
   }
-  return static_cast<float>(floor.gloss * std::pow(c, kGlossExponent));
+  return static_cast<float>(floorGlare(point, ray));
 }
 
 std::string Scene::objectName(int object) const {
