@@ -144,14 +144,16 @@ cv::Mat exposeSensor(const cv::Mat& sharp, const RenderConfig& render, uint64_t 
       addSensorNoise(irradiance.ptr<float>(r), render.noise ? z.data() : nullptr, value.data(),
                      irradiance.cols, per_electron, read_variance);
       // Rounded to the nearest DN: value is in [0, 1].
-      if (levels && render.bit_depth == 8)
-        levels->quantize(value.data(), image.ptr<uint8_t>(r), irradiance.cols);
-      else if (levels)
-        levels->quantize(value.data(), image.ptr<uint16_t>(r), irradiance.cols);
-      else if (render.bit_depth == 8)
-        quantize(value.data(), full, image.ptr<uint8_t>(r), irradiance.cols);
+      const auto quantizeRow = [&](auto* out) {
+        if (levels)
+          levels->quantize(value.data(), out, irradiance.cols);
+        else
+          quantize(value.data(), full, out, irradiance.cols);
+      };
+      if (render.bit_depth == 8)
+        quantizeRow(image.ptr<uint8_t>(r));
       else
-        quantize(value.data(), full, image.ptr<uint16_t>(r), irradiance.cols);
+        quantizeRow(image.ptr<uint16_t>(r));
     }
   });
   return image;
